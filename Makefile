@@ -1,0 +1,41 @@
+# The two commands: `make demo` and `make test`. Both set up .venv on first use.
+SHELL := /bin/bash
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.treebook-installed
+FLAGS ?=
+
+.PHONY: install demo test test-slow readme export clean lint
+
+$(PY):
+	python3 -m venv $(VENV)
+
+# torch==2.13.0 first: it is the CPU build on local disk; the package's own torch range then adds nothing.
+$(STAMP): settings.ini setup.py | $(PY)
+	@bash scripts/system_deps.sh
+	$(PY) -m pip install -q torch==2.13.0
+	$(PY) -m pip install -q -e ".[dev]"
+	@touch $(STAMP)
+
+install: $(STAMP)
+
+demo: install
+	$(VENV)/bin/treebook demo
+
+test: install
+	$(PY) scripts/run_tests.py
+
+test-slow: install
+	$(PY) scripts/run_tests.py --flags slow
+
+# README.md from nbs/index.ipynb, executed, hidden cells removed (quarto is not available here).
+readme: install
+	$(PY) scripts/make_readme.py
+
+# What to run before a commit: notebooks are the source.
+export: install
+	$(VENV)/bin/nbdev_clean
+	$(VENV)/bin/nbdev_export
+
+clean:
+	rm -rf build dist *.egg-info treebook-demo _proc
