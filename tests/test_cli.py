@@ -1,0 +1,124 @@
+"""The `treebook` command end to end, in subprocesses, and the wheel on its own."""
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from treebook.tree import Tree, example_tree
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(cmd, *args, cwd=None):
+    return subprocess.run([cmd, *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture
+def tree_file(tmp_path):
+    return example_tree(levels=4, seed=5).save(tmp_path / "x.npz")
+
+
+@pytest.mark.parametrize("ext", ["glb", "obj", "ply"])
+def test_export_loads_back_with_the_trees_bounds(treebook_cmd, tree_file, tmp_path, ext):
+    r = run(treebook_cmd, "export", tree_file, "--out", tmp_path / f"x.{ext}")
+    assert r.returncode == 0, r.stderr
+    mesh = trimesh.load(tmp_path / f"x.{ext}", force="mesh")
+    tree = Tree.load(tree_file)
+    # the mesh is the tree's skeleton thickened by its radii: same box, padded by at most the largest radius
+    rmax = max(tree.start[:, 3].max(), tree.end[:, 3].max())
+    assert np.allclose(mesh.bounds, tree.bounds(with_radius=True), atol=rmax)
+    assert np.all(mesh.bounds[0] <= tree.bounds()[0] + 1e-6) and np.all(mesh.bounds[1] >= tree.bounds()[1] - 1e-6)
+
+
+def test_export_skeleton_and_render(treebook_cmd, tree_file, tmp_path):
+    r = run(treebook_cmd, "export", tree_file, "--out", tmp_path / "s.ply", "--skeleton")
+    assert r.returncode == 0, r.stderr
+    from treebook.mesh import read_skeleton
+    assert read_skeleton(tmp_path / "s.ply").parent.tolist() == Tree.load(tree_file).parent.tolist()
+    r = run(treebook_cmd, "render", tree_file, "--out", tmp_path / "x.png", "--size", "200")
+    assert r.returncode == 0, r.stderr
+    from PIL import Image
+    img = np.asarray(Image.open(tmp_path / "x.png").convert("RGB"))
+    assert img.shape == (200, 200, 3)
+    assert img.std() > 5 and (img.min(-1) < 200).mean() > 0.01  # not blank: some dark (bark) pixels
+
+
+def test_info(treebook_cmd, tree_file):
+    r = run(treebook_cmd, "info", tree_file, "--json")
+    assert r.returncode == 0, r.stderr
+    import json
+    assert json.loads(r.stdout)["branches"] == Tree.load(tree_file).n
+
+
+def _bad_files(d: Path):
+    t = example_tree(levels=2)
+    np.savez(d / "noparent.npz", start=t.start, end=t.end)
+    s = t.start.copy(); s[1, 0] = np.nan
+    np.savez(d / "nan.npz", start=s, end=t.end, parent=t.parent)
+    e = t.end.copy(); e[0, 3] = -1
+    np.savez(d / "negative.npz", start=t.start, end=e, parent=t.parent)
+    p = t.parent.copy(); p[2] = 4  # branch 4 is on another limb: forward, but no cycle
+    np.savez(d / "forward.npz", start=t.start, end=t.end, parent=p)
+    p = t.parent.copy(); p[1] = 7 * t.n
+    np.savez(d / "range.npz", start=t.start, end=t.end, parent=p)
+    p = t.parent.copy(); p[1], p[2] = 2, 1
+    np.savez(d / "cycle.npz", start=t.start, end=t.end, parent=p)
+    np.savez(d / "empty.npz", start=np.zeros((0, 4)), end=np.zeros((0, 4)), parent=np.zeros(0, int))
+    (d / "tree.txt").write_text("not a tree")
+    return {"missing.npz": "no such file", "tree.txt": "expected a .npz or .json", "noparent.npz": "missing the array(s) parent",
+            "nan.npz": "not a finite number", "negative.npz": "negative radius", "forward.npz": "comes after it",
+            "range.npz": "out of range", "cycle.npz": "form a cycle", "empty.npz": "the tree is empty"}
+
+
+@pytest.mark.parametrize("cmd", ["info", "export", "render"])
+def test_bad_input_is_one_line_and_exit_2(treebook_cmd, tmp_path, cmd):
+    for name, msg in _bad_files(tmp_path).items():
+        extra = {"info": [], "export": ["--out", tmp_path / "o.obj"], "render": ["--out", tmp_path / "o.png"]}[cmd]
+        r = run(treebook_cmd, cmd, tmp_path / name, *extra)
+        assert r.returncode == 2, (name, r.returncode, r.stderr)
+        assert r.stderr.startswith("error: ") and r.stderr.count("\n") == 1 and msg in r.stderr, (name, r.stderr)
+        assert "Traceback" not in r.stderr
+        assert not (tmp_path / "o.obj").exists() and not (tmp_path / "o.png").exists()
+
+
+def test_wrong_flags_are_one_line_and_exit_2(treebook_cmd, tree_file, tmp_path):
+    for args in (["export", tree_file], ["export", tree_file, "--out", tmp_path / "x.stl"], ["frobnicate"],
+                 ["render", tree_file, "--out", tmp_path / "x.png", "--size", "ten"], []):
+        r = run(treebook_cmd, *args)
+        assert r.returncode == 2 and r.stderr.startswith("error: ") and r.stderr.count("\n") == 1, (args, r.stderr)
+
+
+def test_help_of_every_subcommand(treebook_cmd):
+    for sub in ([], ["demo"], ["info"], ["export"], ["render"]):
+        r = run(treebook_cmd, *sub, "--help")
+        assert r.returncode == 0 and "usage: treebook" in r.stdout, (sub, r.stderr)
+
+
+def test_demo_writes_an_obj_and_a_picture_of_the_tree(treebook_cmd, tmp_path):
+    r = run(treebook_cmd, "demo", "--out", tmp_path / "demo")
+    assert r.returncode == 0, r.stderr
+    obj = trimesh.load(tmp_path / "demo" / "tree.obj", force="mesh")
+    assert len(obj.faces) > 100
+    from PIL import Image
+    assert np.asarray(Image.open(tmp_path / "demo" / "tree.png")).std() > 5
+
+
+def test_wheel_runs_the_demo_on_its_own(tmp_path):
+    "Build the wheel, install it alone into a folder away from the source tree, and run the demo from it."
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-w", tmp_path / "dist", ROOT],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    wheel = next((tmp_path / "dist").glob("treebook-*.whl"))
+    target = tmp_path / "site"
+    r = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target", target, wheel], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    work = tmp_path / "elsewhere"; work.mkdir()
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import treebook, treebook.cli; "
+            "assert treebook.__file__.startswith(sys.argv[1]), treebook.__file__; "
+            "sys.exit(treebook.cli.main(['demo', '--out', 'out']))")
+    r = subprocess.run([sys.executable, "-I", "-c", code, str(target)], capture_output=True, text=True, cwd=work, timeout=600)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert (work / "out" / "tree.obj").exists() and (work / "out" / "tree.png").exists()
