@@ -1,0 +1,49 @@
+"""Benchmark: the set metrics (MMD-CD, COV-CD, 1-NNA, JSD, Unique, Novel) for N generated vs N reference trees.
+
+Usage: python benchmarks/metrics.py [--n 1000] [--points 2048]
+Writes results/metrics_bench.json. Trees: procedural elms from treebook.botany (two disjoint seed ranges).
+Goal (issue 6): 1,000 vs 1,000 trees in at most 5 minutes on 2 cores.
+"""
+import argparse, json, os, platform, subprocess, sys, time
+from pathlib import Path
+
+import numpy as np
+
+root = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(root))
+from treebook.metrics import tree_clouds, evaluate
+
+ap = argparse.ArgumentParser(description=__doc__)
+ap.add_argument("--n", type=int, default=1000)
+ap.add_argument("--points", type=int, default=2048)
+ap.add_argument("--species", default="elm")
+args = ap.parse_args()
+
+from treebook.botany import grow_tree, species
+from tqdm.auto import tqdm
+sp = species(args.species)
+t0 = time.time()
+gen = [grow_tree(sp, seed=s) for s in tqdm(range(args.n), desc="growing G")]
+ref = [grow_tree(sp, seed=100000 + s) for s in tqdm(range(args.n), desc="growing R")]
+t_grow = time.time() - t0
+
+t0 = time.time()
+G, R = tree_clouds(gen, args.points, seed=0), tree_clouds(ref, args.points, seed=10**6)
+t_sample = time.time() - t0
+t0 = time.time()
+m = evaluate(G, R, train=R)
+t_metrics = time.time() - t0
+
+commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+res = {"command": "python benchmarks/metrics.py " + " ".join(sys.argv[1:]), "commit": commit,
+       "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
+                   "load_avg_1min_at_end": os.getloadavg()[0]},
+       "n_gen": args.n, "n_ref": args.n, "points": args.points, "species": args.species,
+       "seconds": {"grow_trees": round(t_grow, 1), "sample_clouds": round(t_sample, 1), "metrics": round(t_metrics, 1),
+                   "sample_plus_metrics": round(t_sample + t_metrics, 1)},
+       "goal_seconds": 300, "metrics": m,
+       "note": "R also serves as the 'training' set for Novel here, so Novel measures only the duplicate test's cost."}
+out = root / "results" / "metrics_bench.json"
+out.parent.mkdir(exist_ok=True)
+out.write_text(json.dumps(res, indent=1))
+print(json.dumps(res, indent=1))
