@@ -122,3 +122,17 @@ def test_wheel_runs_the_demo_on_its_own(tmp_path):
     r = subprocess.run([sys.executable, "-I", "-c", code, str(target)], capture_output=True, text=True, cwd=work, timeout=600)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert (work / "out" / "tree.obj").exists() and (work / "out" / "tree.png").exists()
+
+
+def test_generate_every_species_from_the_command_line(treebook_cmd, tmp_path):
+    "`treebook generate` makes 100 elms and 20 trees of each other species: valid Trees within their caps."
+    from treebook.botany import SPECIES
+    from treebook.datasets import load_trees
+    for name, spec in SPECIES.items():
+        n = 100 if name == "elm" else 20
+        r = run(treebook_cmd, "generate", "--species", name, "--n", n, "--stages", 10, "--trees", "--out", tmp_path / name)
+        assert r.returncode == 0, r.stderr
+        trees = load_trees(tmp_path / name)
+        assert len(trees) == n and all(2 <= t.n <= spec.max_branches for t in trees)
+        files = sorted((tmp_path / name / "trees").glob("tree_*.npz"))
+        assert len(files) == n and Tree.load(files[0]).n == trees[0].n
