@@ -134,3 +134,31 @@ def test_every_shared_scan(name):
     assert g.n_rules > 10
     for t in propagate(g, n=2, seed=1):
         assert t.n > 10
+
+
+def test_simplify_turns_staircase_into_limb():
+    from treebook.lsystem import simplify
+    stair = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 2], [2, 0, 2], [2, 0, 3], [3, 0, 3], [3, 0, 4], [4, 0, 4], [1, 1, 1]], float)
+    q, par = simplify(stair, np.array([-1, 0, 1, 2, 3, 4, 5, 6, 7, 2]), h=1.0)
+    assert len(q) < 5 and par[0] == -1 and (par[1:] < np.arange(1, len(q))).all()
+    np.testing.assert_allclose(q[[0, -1]], [[0, 0, 0], [4, 0, 4]])
+
+
+@pytest.mark.skipif(not SCANS.exists(), reason="shared scans not present")
+def test_propagated_trees_are_siblings_of_the_scan():
+    """Chamfer (normalised by height): propagated trees are much nearer the scan than other scans are, yet differ from each other."""
+    from treebook.lsystem import chamfer
+    g, trees, _, _ = _infer(shipped_scan(), 128, compress=False)
+    ref = trees[g.finest]
+    forest = propagate(g, n=3, seed=0)
+    others = []
+    for name in ["tree1.xyz", "tree7.xyz", "pytlidar_tree_1.las"]:
+        _, tr, _, _ = _infer(SCANS / name, 128, compress=False)
+        others.append(chamfer(ref, tr[max(tr)]))
+    prop = [chamfer(ref, t) for t in forest]
+    assert max(prop) < 0.8 * min(others), (prop, others)
+    assert min(chamfer(forest[i], forest[j]) for i in range(3) for j in range(i + 1, 3)) > 0.01
+    for t in forest:
+        assert abs(t.height - ref.height) <= 0.2 * ref.height
+    enh = enhance(shipped_scan(), levels=1, grid=128, seed=0)
+    assert chamfer(ref, enh) < 0.5 * min(prop)
