@@ -17,6 +17,7 @@ ap = argparse.ArgumentParser(description=__doc__)
 ap.add_argument("--n", type=int, default=1000)
 ap.add_argument("--points", type=int, default=2048)
 ap.add_argument("--species", default="elm")
+ap.add_argument("--check", type=int, default=100, help="also compare nearest neighbours with brute force on CHECK vs CHECK trees (0: skip)")
 args = ap.parse_args()
 
 from treebook.botany import grow_tree, species
@@ -34,6 +35,21 @@ t0 = time.time()
 m = evaluate(G, R, train=R)
 t_metrics = time.time() - t0
 
+check = None
+if args.check:
+    from scipy.spatial import cKDTree
+    from treebook.metrics import chamfer, nearest
+    c = args.check
+    Gc, Rc = G[:c].astype(np.float64), R[:c].astype(np.float64)
+    kg, kr = [cKDTree(x) for x in Gc], [cKDTree(x) for x in Rc]
+    t0 = time.time()
+    ex = np.array([[chamfer(Gc[i], Rc[j], kg[i], kr[j]) for j in range(c)] for i in tqdm(range(c), desc="brute force")])
+    t_brute = time.time() - t0
+    check = {"trees": c, "brute_force_seconds": round(t_brute, 1), "by_k": {}}
+    for k in (1, 2, 3, 5, 10):
+        d, i, cert = nearest(Gc, Rc, k, kd=(kg, kr))
+        check["by_k"][k] = {"same_nearest": float((i == ex.argmin(1)).mean()), "max_abs_error": float(np.abs(d - ex.min(1)).max()), "certified": cert}
+
 commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
 res = {"command": "python benchmarks/metrics.py " + " ".join(sys.argv[1:]), "commit": commit,
        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
@@ -41,7 +57,7 @@ res = {"command": "python benchmarks/metrics.py " + " ".join(sys.argv[1:]), "com
        "n_gen": args.n, "n_ref": args.n, "points": args.points, "species": args.species,
        "seconds": {"grow_trees": round(t_grow, 1), "sample_clouds": round(t_sample, 1), "metrics": round(t_metrics, 1),
                    "sample_plus_metrics": round(t_sample + t_metrics, 1)},
-       "goal_seconds": 300, "metrics": m,
+       "goal_seconds": 300, "metrics": m, "nearest_vs_brute_force": check,
        "note": "R also serves as the 'training' set for Novel here, so Novel measures only the duplicate test's cost."}
 out = root / "results" / "metrics_bench.json"
 out.parent.mkdir(exist_ok=True)
