@@ -15,8 +15,16 @@ TINY = dict(dim=32, depth=8, heads=2, max_len=128)
 FAKE = SimpleNamespace(**vars(CONTRACT), root_tokens=(128, 128, 0), min_radius_token=2)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def one_thread():
+    "Tiny models run faster on one thread, and much faster when other jobs share the cores."
+    n = torch.get_num_threads(); torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(n)
+
+
 @pytest.fixture(scope="module")
-def models():
+def models(one_thread):
     out = {}
     for i, arch in enumerate(ARCHS):
         torch.manual_seed(i)
