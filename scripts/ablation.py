@@ -40,7 +40,12 @@ def one_run(a, order, arch, lr, out):
     seqs = sample(model, a.samples, tok=tok, temperature=1.0, structure=True, min_len=24, seed=a.seed)
     free = sample(model, a.samples, tok=tok, temperature=1.0, structure=False, min_len=24, seed=a.seed + 1)
     gen = [g for g in (tok.decode(s) for s in seqs) if g.n]
-    G, R, T = tree_clouds(gen, seed=1, progress=False), tree_clouds(test, seed=2, progress=False), tree_clouds(trn[:1000], seed=3, progress=False)
+    cache = Path(a.runs) / "reference_clouds.npz"  # held-out and (500) training clouds, made once for all runs
+    if not cache.exists():
+        R, T = tree_clouds(test, seed=2, progress=False), tree_clouds(trn[:500], seed=3, progress=False)
+        np.savez(cache, R=R, T=T)
+    with np.load(cache) as z: R, T = z["R"], z["T"]
+    G = tree_clouds(gen, seed=1, progress=False)
     s = evaluate(G, R, train=T)
     per_epoch = len(trn) // a.batch_size
     res = {"order": order, "arch": arch, "lr": lr, "steps": r["step"], "n_params": r["n_params"], "train_seconds": train_s,
