@@ -184,3 +184,12 @@ def test_variants_differ_as_configured():
     assert len(counts["pt"].mid) == 8 and len(counts["hg1"].mid) == 6 and len(counts["full"].mid) == 4
     assert counts["full"].alpha.requires_grad and not counts["hg2r"].alpha.requires_grad
     assert len(counts["hg2"].alpha) == 0 and len(counts["full"].alpha) == 2
+
+
+def test_pick_follows_the_distribution():
+    logits = torch.tensor([0.5, 1.5, -1.0, 0.0, -40.0])
+    draws = pick(logits.repeat(50000, 1), generator=torch.Generator().manual_seed(1))
+    freq = torch.bincount(draws, minlength=5).float() / 50000
+    torch.testing.assert_close(freq, logits.softmax(-1), atol=0.01, rtol=0)
+    top2 = pick(logits.repeat(2000, 1), top_k=2, generator=torch.Generator().manual_seed(2))
+    assert set(top2.tolist()) == {0, 1}
