@@ -193,3 +193,17 @@ def test_pick_follows_the_distribution():
     torch.testing.assert_close(freq, logits.softmax(-1), atol=0.01, rtol=0)
     top2 = pick(logits.repeat(2000, 1), top_k=2, generator=torch.Generator().manual_seed(2))
     assert set(top2.tolist()) == {0, 1}
+
+
+@pytest.mark.parametrize("arch", ["hg1", "full"])
+def test_one_prompt_per_row(models, arch):
+    rows = np.array([[256] * 8 + [128, 128, 0, 9, 130, 120, 40, 7, 130, 120],
+                     [256] * 8 + [128, 128, 0, 4, 100, 90, 80, 3, 100, 90]])
+    kw = dict(tok=FAKE, prompt=rows, max_len=48, min_len=48, temperature=0, return_logits=True)
+    a, la = sample(models[arch], 2, **kw)
+    b, lb = sample(models[arch], 2, cache=False, **kw)
+    assert [s.tolist() for s in a] == [s.tolist() for s in b]
+    torch.testing.assert_close(la, lb, atol=1e-4, rtol=1e-4)
+    for s, r in zip(a, rows):
+        assert s[:len(r)].tolist() == r.tolist() and token_connectivity(s, FAKE) == 1.0
+    assert a[0][18] == 40 and a[1][18] == 80          # each row's third start coordinate follows its own prompt
