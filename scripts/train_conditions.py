@@ -79,6 +79,24 @@ else:
         rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
     res["eval"] = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 res["seconds_eval"] = time.time() - t0
+# a figure: four held-out inputs and the silhouettes of the trees generated from them (same front camera)
+from PIL import Image, ImageDraw
+from treebook.scan import silhouette, sketch, _to_px
+from treebook.render import image_grid
+from treebook.metrics import sample_surface
+from treebook.condition import image_to_tree, sketch_to_tree, points_to_tree, points_input
+pics, labels = [], []
+for i, t in enumerate(test[:4]):
+    if a.kind == "image": inp, g = Image.fromarray(255 - silhouette(t)), image_to_tree(silhouette(t), 1, a.seed + i, pair)[0]
+    elif a.kind == "sketch": inp, g = Image.fromarray(255 - sketch(t)[1]), sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair)[0]
+    else:
+        pts = sample_surface(t, 4 * 200, a.seed + i)
+        inp = Image.new("L", (224, 224), 255); dr = ImageDraw.Draw(inp)
+        for x, y in _to_px(points_input(pts, a.seed + i)[1][:, [0, 2]], 224): dr.ellipse([x - 1, y - 1, x + 1, y + 1], fill=0)
+        g = points_to_tree(pts, 1, a.seed + i, pair)[0]
+    pics += [inp, Image.fromarray(255 - silhouette(g)) if g.n else Image.new("L", (224, 224), 255)]
+    labels += [f"held-out {i}: input", f"generated ({g.n} branches)"]
+image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"conditions_{a.kind}_{a.order}.png")
 (root / "results").mkdir(exist_ok=True)
 name = f"conditions_{a.kind}_{a.order}"
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
