@@ -1,0 +1,28 @@
+"""Time `treebook sample`: 16 trees from the shipped elm model on this machine's CPU (target: at most 15 s on 2 cores).
+
+Usage: python benchmarks/sample.py [--n 16] [--repeats 3]
+Writes results/sample.json (command, commit, machine, seconds per repeat, best and median).
+"""
+import argparse, json, os, platform, subprocess, sys, time
+from pathlib import Path
+import numpy as np, torch
+from treebook.train import sample_trees, load_pretrained
+
+root = Path(__file__).resolve().parent.parent
+p = argparse.ArgumentParser(); p.add_argument("--n", type=int, default=16); p.add_argument("--repeats", type=int, default=3)
+a = p.parse_args()
+t = time.time(); model = load_pretrained("elm"); load_s = time.time() - t
+times, branches = [], []
+for r in range(a.repeats):
+    t = time.time(); trees = sample_trees(a.n, model=model, seed=r); times.append(time.time() - t)
+    branches.append(float(np.mean([x.n for x in trees])))
+res = {"command": "python benchmarks/sample.py " + " ".join(sys.argv[1:]),
+       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+       "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": torch.get_num_threads(), "torch": torch.__version__,
+                   "load_average": os.getloadavg()},
+       "n": a.n, "load_seconds": load_s, "seconds": times, "best_s": min(times), "median_s": float(np.median(times)),
+       "branches_mean": branches, "target": "16 trees in <= 15 s on 2 cores"}
+(root / "results").mkdir(exist_ok=True)
+(root / "results" / "sample.json").write_text(json.dumps(res, indent=1))
+print(json.dumps(res, indent=1))
