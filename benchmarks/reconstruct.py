@@ -93,7 +93,7 @@ def clustering(weights, n_scans):
     from sklearn.cluster import MeanShift, SpectralClustering, DBSCAN, estimate_bandwidth
     model = load_partnet(weights)
     n = model.cfg.n_points
-    res = {k: [] for k in ("ours", "ours_fine", "mean_shift", "spectral", "dbscan")}
+    res = {k: [] for k in ("ours", "ours_strict", "ours_fine", "mean_shift", "spectral", "dbscan")}
     merge, ks = [], []
     jobs = [(sp, 9000 + i) for i in range(n_scans) for sp in SPECIES][:n_scans]
     for sp, s in tqdm(jobs, desc="clustering"):
@@ -105,6 +105,7 @@ def clustering(weights, n_scans):
         q, _, _ = normalize_points(p)
         seg = segment(model, p, seed=0)
         res["ours"].append(cluster_scores(seg["branch"], part)); res["ours_fine"].append(cluster_scores(seg["fine"], part))
+        res["ours_strict"].append(cluster_scores(segment(model, p, seed=0, threshold=0.7, neighbours=4)["branch"], part))  # as reconstruct merges
         # merging scores on the seeds of this run
         import torch
         with torch.no_grad():
