@@ -145,7 +145,7 @@ def main():
     except OSError: commit = "?"
     command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
     meta = dict(steps=step, batch=a.batch, minutes=round(minutes, 1), train_scans=len(train), test_scans=len(test), metrics=metrics,
-                command=command, commit=commit, machine=f"{platform.machine()}, {a.threads} threads", torch=torch.__version__)
+                command=command, commit=commit, machine=f"{platform.machine()}, {a.threads} threads", torch=str(torch.__version__))
     out = Path(a.out)
     save_partnet(model, out, **meta)
     res = root / "results" / f"partnet_train{'_nocos' if a.no_cosine else ''}{'_nofocal' if a.no_focal else ''}.json"
