@@ -99,6 +99,9 @@ for i, t in enumerate(test[:4]):
 image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"conditions_{a.kind}_{a.order}.png")
 (root / "results").mkdir(exist_ok=True)
 name = f"conditions_{a.kind}_{a.order}"
+if a.eval_only and (root / "results" / f"{name}.json").exists():   # keep the command that trained the run
+    old = json.loads((root / "results" / f"{name}.json").read_text())
+    res["train_command"] = old.get("train_command", old.get("command"))
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
 table = json.loads(tp.read_text()) if tp.exists() else {"table": {}}
