@@ -79,6 +79,9 @@ res = {"command": "python scripts/train_growth.py " + " ".join(sys.argv[1:]),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
        "run": {"step": ck["step"], "steps_planned": a.steps, "seconds": ck["seconds"], "n_params": net.n_params, **meta,
                "config": vars(net.config)}}
+if a.eval_only and (root / "results" / "growth.json").exists():     # keep the command that trained the run
+    old = json.loads((root / "results" / "growth.json").read_text())
+    res["train_command"] = old.get("train_command", old.get("command"))
 seqs = np.stack([encode_growth(tok, t, STAGES, length=max_len) for t in test[:a.val]])
 res["val"] = perplexity(net, seqs, batch_size=4)
 t0 = time.time()
@@ -106,7 +109,7 @@ if a.ship:
 - **Data**: the growth histories (`botany.grow('elm', seed, stages=10, max_branches=200)`) of the first {len(train)} training trees of the `elm` dataset (`data/elm`, same seeds), in the incremental layout of `treebook.growth.encode_growth` (each stage's new branches in DFS order, one block of eight [STAGE] tokens between stages); rotation about z and mirroring.
 - **Model**: arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}, {net.n_params:,} parameters, max_len {c.max_len}; {'started from `' + str(a.init) + '` (branch positions extended)' if a.init else 'trained from scratch'}.
 - **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on one thread of a shared 2-core CPU.
-- **Command**: `{res['command']}`; commit {res['commit']}.
+- **Command**: `{res.get('train_command', res['command'])}`{'; evaluated and shipped by `' + res['command'] + '`' if 'train_command' in res else ''}; commit {res['commit']}.
 - **Metrics** (`results/growth.json`): held-out loss {res['val']['loss']:.3f} (perplexity {res['val']['ppl']:.1f}) on {a.val} histories; containment {res['containment']:.3f} over {a.samples} samples (1.0 by construction of the layout); all ten stages present in {100 * res['stages_complete']:.0f}% of samples; mean branches per stage, samples {res['branches_per_stage']['samples']} against data {res['branches_per_stage']['data']}.
 - **Limits**: a small model trained briefly on a CPU: its trees are rougher than the procedural ones; retrain with more steps for better shapes.
 """
