@@ -39,3 +39,21 @@ def test_grammar_bad_inputs(treebook_cmd, tmp_path):
         r = run(treebook_cmd, *args, "--out", tmp_path / "g.json")
         assert r.returncode == 2 and r.stderr.startswith("error: ") and r.stderr.count("\n") == 1 and msg in r.stderr, r.stderr
         assert not (tmp_path / "g.json").exists()
+
+
+@pytest.mark.parametrize("name", ["elm", "spruce"])
+def test_grammar_commands_on_procedural_scans(treebook_cmd, tmp_path, name):
+    "The same three commands on a virtual scan of a grown tree (scaled to 8 m, saved as .npy)."
+    import numpy as np
+    from treebook.botany import grow_tree
+    from treebook.scan import scan
+    s = scan(grow_tree(name, seed=3), n_points=16384, seed=3)
+    np.save(tmp_path / "scan.npy", s.points * 8.0)
+    r = run(treebook_cmd, "grammar", tmp_path / "scan.npy", "--grid", "128", "--out", tmp_path / "g.json")
+    assert r.returncode == 0, r.stderr
+    r = run(treebook_cmd, "propagate", tmp_path / "g.json", "--n", "2", "--out", tmp_path / "prop")
+    assert r.returncode == 0, r.stderr
+    a, b = (Tree.load(tmp_path / "prop" / f"propagated_{k:03d}.npz") for k in range(2))
+    assert not np.array_equal(a.end, b.end)
+    r = run(treebook_cmd, "enhance", tmp_path / "scan.npy", "--out", tmp_path / "enh")
+    assert r.returncode == 0, r.stderr
