@@ -3,7 +3,7 @@ and peak memory for each architecture, at the ablation's size and at the shipped
 
 Usage: python scripts/ablation_cost.py [--repeats 3] [--threads 1]
 Timing is round-robin over the architectures (each repeat times every one once), so that load from other jobs falls on
-all of them alike; the median is reported. Memory: each architecture in a fresh process, peak resident set after two
+all of them alike; the median is reported. Memory: each architecture in a fresh process, peak resident set (VmHWM, reset just before) during two
 steps minus the resident set before the first. Writes results/ablation_cost.json (command, commit, machine).
 """
 import argparse, json, os, platform, resource, subprocess, sys, time
@@ -26,9 +26,11 @@ def step(m, opt, x):
 
 def memory(arch, size):
     s = SIZES[size]; m, opt, x = make(arch, s)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    status = lambda key: int(next(l for l in open("/proc/self/status") if l.startswith(key)).split()[1])  # kB
+    Path("/proc/self/clear_refs").write_text("5")  # Linux: reset the peak resident set (VmHWM) to the current one
+    before = status("VmRSS:")
     for _ in range(2): step(m, opt, x)
-    print(json.dumps({"peak_mb": (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024}))
+    print(json.dumps({"peak_mb": (status("VmHWM:") - before) / 1024}))
 
 def main():
     p = argparse.ArgumentParser(); p.add_argument("--repeats", type=int, default=3); p.add_argument("--threads", type=int, default=1)
