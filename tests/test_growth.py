@@ -100,9 +100,21 @@ def test_missing_weights_say_what_to_do():
     with pytest.raises(TreebookError, match="no shipped conditional model"): load_conditional("elm-nothing")
 
 
-def test_demo_growth(tmp_path):
+def test_demo_growth_without_weights(tmp_path, monkeypatch):
+    "A fresh checkout without the growth and image weights still gets a (procedural) filmstrip."
+    import treebook.train
+    monkeypatch.setattr(treebook.train, "WEIGHTS", tmp_path / "no-weights")
     paths = demo_growth(tmp_path, seed=0)
-    assert any(p.name == "growth_filmstrip.png" for p in paths) and all(Path(p).exists() for p in paths)
+    assert (tmp_path / "growth_procedural" / "growth_filmstrip.png") in paths and all(Path(p).exists() for p in paths)
+
+
+@pytest.mark.skipif(not (WEIGHTS / "elm-grow.pt").is_file(), reason="elm-grow is not shipped")
+def test_shipped_growth_model():
+    "The shipped elm-grow writes ten stages, each contained in the next (a few seconds of sampling)."
+    from treebook.train import load_pretrained
+    net, tok = load_pretrained("elm-grow")
+    stages = grow_sequence((net, tok), seed=0)
+    assert len(stages) == 10 and stages[-1].n > stages[0].n and containment(stages, tok) == 1.0
 
 
 def test_sketch_files(toy, tmp_path):
