@@ -97,17 +97,8 @@ def test_help_of_every_subcommand(treebook_cmd):
         assert r.returncode == 0 and "usage: treebook" in r.stdout, (sub, r.stderr)
 
 
-def test_demo_writes_an_obj_and_a_picture_of_the_tree(treebook_cmd, tmp_path):
-    r = run(treebook_cmd, "demo", "--out", tmp_path / "demo")
-    assert r.returncode == 0, r.stderr
-    obj = trimesh.load(tmp_path / "demo" / "tree.obj", force="mesh")
-    assert len(obj.faces) > 100
-    from PIL import Image
-    assert np.asarray(Image.open(tmp_path / "demo" / "tree.png")).std() > 5
-
-
 def test_wheel_runs_the_demo_on_its_own(tmp_path):
-    "Build the wheel, install it alone into a folder away from the source tree, and run the demo from it."
+    "Build the wheel, install it alone into a folder away from the source tree, and run the whole demo from it: an OBJ and a picture of the tree, and every step's files."
     r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-w", tmp_path / "dist", ROOT],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
@@ -121,7 +112,13 @@ def test_wheel_runs_the_demo_on_its_own(tmp_path):
             "sys.exit(treebook.cli.main(['demo', '--out', 'out']))")
     r = subprocess.run([sys.executable, "-I", "-c", code, str(target)], capture_output=True, text=True, cwd=work, timeout=600)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
-    assert (work / "out" / "tree.obj").exists() and (work / "out" / "tree.png").exists()
+    obj = trimesh.load(work / "out" / "tree.obj", force="mesh")
+    assert len(obj.faces) > 100
+    from PIL import Image
+    assert np.asarray(Image.open(work / "out" / "tree.png")).std() > 5
+    for name in ("species_gallery.png", "grammar/grammar.json", "reconstruct/reconstructed_tree13.obj"):
+        assert (work / "out" / name).exists(), name
+    assert any((work / "out" / "growth").rglob("growth_filmstrip.png"))
 
 
 def test_generate_every_species_from_the_command_line(treebook_cmd, tmp_path):
