@@ -110,6 +110,7 @@ def main():
     ## Against the issue's quality figures
 
     """ + "\n".join(f"- {k}: {'met' if v else 'NOT met'}" for k, v in res["targets"].items()) + "\n"
+        card = "\n".join(l[4:] if l.startswith("    ") else l for l in card.splitlines()) + "\n"  # the f-string sits indented in main()
         (WEIGHTS / "elm.md").write_text(card)
         print(card)
 
