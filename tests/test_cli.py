@@ -92,7 +92,8 @@ def test_wrong_flags_are_one_line_and_exit_2(treebook_cmd, tree_file, tmp_path):
 
 
 def test_help_of_every_subcommand(treebook_cmd):
-    for sub in ([], ["demo"], ["info"], ["export"], ["render"]):
+    for sub in ([], *([c] for c in ("demo", "info", "export", "render", "generate", "grammar", "enhance", "propagate", "reconstruct",
+                                      "train", "sample", "grow", "complete", "sketch2tree", "points2tree", "image2tree"))):
         r = run(treebook_cmd, *sub, "--help")
         assert r.returncode == 0 and "usage: treebook" in r.stdout, (sub, r.stderr)
 
