@@ -24,6 +24,10 @@ for cell in nb.cells:
     if cell.cell_type == "code":
         cell.source = "\n".join(l for l in lines if not directive.match(l)).strip()
         cell.outputs = [o for o in cell.outputs if o.get("output_type") != "stream" or o.get("name") != "stderr"]
+        for o in cell.outputs:  # open3d announces itself when imported in Jupyter: not part of the page
+            if o.get("output_type") == "stream":
+                o["text"] = "".join(l for l in o["text"].splitlines(True) if not l.startswith(("[Open3D", "Jupyter environment detected")))
+        cell.outputs = [o for o in cell.outputs if o.get("output_type") != "stream" or o["text"].strip()]
         for o in cell.outputs:  # one picture per output: keep the PNG
             if "image/png" in o.get("data", {}): o["data"].pop("image/jpeg", None)
         if flags.get("echo") == "false": cell.source = ""
