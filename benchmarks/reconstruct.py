@@ -1,8 +1,12 @@
 """Reconstruction benchmark: speed (16,384 and 1,000,000 points), real scans, skeleton accuracy, clustering and merging scores.
 
 Usage: python benchmarks/reconstruct.py [--weights PATH] [--trees-per-species 2] [--cluster-scans 12] [--out results/reconstruct.json]
+                                      [--only PARTS] [--skip PARTS] [--cluster-rows ROWS] [--merge] [--threads 2]
 
 Writes results/reconstruct.json with the command, commit and machine. Timings are wall-clock on this machine (shared CPU).
+With --merge the parts (and, for the clustering table, the rows) computed by this run replace theirs in the existing file and
+everything else is kept; the run is recorded under "updates" with its command and commit. For example, the SOM row alone:
+  python benchmarks/reconstruct.py --only clustering --cluster-rows som --cluster-scans 6 --merge
 """
 import argparse, json, os, platform, resource, subprocess, sys, time
 from pathlib import Path
@@ -17,7 +21,8 @@ from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.mesh import tree_mesh
 from treebook.pointio import read_points
-from treebook.partnet import WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, branch_chains, normalize_points, merge_seeds
+from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, branch_chains, normalize_points, merge_seeds,
+                              som_clusters)
 from treebook.reconstruct import reconstruct, coverage, skeleton_distance
 
 SCANS = root.parent / "shared" / "data" / "scans"
@@ -88,12 +93,15 @@ def skeletons(weights, methods, per_species):
     return dict(summary=summary, rows=rows)
 
 
-def clustering(weights, n_scans):
-    "RI / NMI of ours and scikit-learn baselines on held-out procedural scans of 4,096 points (paper Table 3), and merging scores."
+CLUSTER_ROWS = ("ours", "ours_strict", "ours_fine", "mean_shift", "spectral", "dbscan", "som")
+
+
+def clustering(weights, n_scans, rows=CLUSTER_ROWS):
+    "RI / NMI of ours and classic baselines (scikit-learn, minisom) on held-out procedural scans of 4,096 points (paper Table 3), and merging scores."
     from sklearn.cluster import MeanShift, SpectralClustering, DBSCAN, estimate_bandwidth
     model = load_partnet(weights)
     n = model.cfg.n_points
-    res = {k: [] for k in ("ours", "ours_strict", "ours_fine", "mean_shift", "spectral", "dbscan")}
+    res = {k: [] for k in rows}
     merge, ks = [], []
     jobs = [(sp, 9000 + i) for i in range(n_scans) for sp in SPECIES][:n_scans]
     for sp, s in tqdm(jobs, desc="clustering"):
@@ -103,25 +111,53 @@ def clustering(weights, n_scans):
         part = np.where(sc.branch >= 0, chain[np.maximum(sc.branch, 0)], -1)
         p = sc.points.astype(np.float64)
         q, _, _ = normalize_points(p)
-        seg = segment(model, p, seed=0)
-        res["ours"].append(cluster_scores(seg["branch"], part)); res["ours_fine"].append(cluster_scores(seg["fine"], part))
-        res["ours_strict"].append(cluster_scores(segment(model, p, seed=0, threshold=0.7, neighbours=4)["branch"], part))  # as reconstruct merges
-        # merging scores on the seeds of this run
-        import torch
-        with torch.no_grad():
-            out = model(torch.from_numpy(q)[None], seed=0)
-        sb = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy())
-        merge.append(merge_scores(sb, part[out["seed_idx"][0].numpy()]))
         k = int(len(np.unique(part[part >= 0]))); ks.append(k)
-        res["mean_shift"].append(cluster_scores(MeanShift(bandwidth=estimate_bandwidth(q, quantile=0.02, random_state=0), bin_seeding=True).fit_predict(q), part))
-        res["spectral"].append(cluster_scores(SpectralClustering(n_clusters=min(k, 256), affinity="nearest_neighbors", n_neighbors=10, random_state=0,
-                                                                 assign_labels="cluster_qr").fit_predict(q), part))
-        eps = float(np.median(np.sort(np.linalg.norm(q[:, None] - q[np.random.default_rng(0).choice(n, 256)][None], axis=2), 0)[5]))
-        res["dbscan"].append(cluster_scores(DBSCAN(eps=eps, min_samples=5).fit_predict(q), part))
+        if "ours" in rows or "ours_fine" in rows:
+            seg = segment(model, p, seed=0)
+            if "ours" in rows: res["ours"].append(cluster_scores(seg["branch"], part))
+            if "ours_fine" in rows: res["ours_fine"].append(cluster_scores(seg["fine"], part))
+        if "ours_strict" in rows:  # as reconstruct merges
+            res["ours_strict"].append(cluster_scores(segment(model, p, seed=0, threshold=0.7, neighbours=4)["branch"], part))
+        if "ours" in rows:  # merging scores on the seeds of this run
+            import torch
+            with torch.no_grad():
+                out = model(torch.from_numpy(q)[None], seed=0)
+            sb = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy())
+            merge.append(merge_scores(sb, part[out["seed_idx"][0].numpy()]))
+        if "mean_shift" in rows:
+            res["mean_shift"].append(cluster_scores(MeanShift(bandwidth=estimate_bandwidth(q, quantile=0.02, random_state=0), bin_seeding=True).fit_predict(q), part))
+        if "spectral" in rows:
+            res["spectral"].append(cluster_scores(SpectralClustering(n_clusters=min(k, 256), affinity="nearest_neighbors", n_neighbors=10, random_state=0,
+                                                                     assign_labels="cluster_qr").fit_predict(q), part))
+        if "dbscan" in rows:
+            eps = float(np.median(np.sort(np.linalg.norm(q[:, None] - q[np.random.default_rng(0).choice(n, 256)][None], axis=2), 0)[5]))
+            res["dbscan"].append(cluster_scores(DBSCAN(eps=eps, min_samples=5).fit_predict(q), part))
+        if "som" in rows:  # given the true number of parts, as spectral clustering is
+            res["som"].append(cluster_scores(som_clusters(q, min(k, n), seed=0), part))
     table = {k: {m: round(float(np.mean([r[m] for r in v])), 3) for m in ("ri", "nmi", "clusters")} for k, v in res.items()}
     table["true_parts"] = round(float(np.mean(ks)), 1)
-    mtable = {m: round(float(np.mean([r[m] for r in merge])), 3) for m in ("precision", "recall", "f1")}
-    return dict(table=table, merging_full=mtable, scans=len(jobs), points=n)
+    out = dict(table=table, scans=len(jobs), points=n)
+    if merge: out["merging_full"] = {m: round(float(np.mean([r[m] for r in merge])), 3) for m in ("precision", "recall", "f1")}
+    return out
+
+
+PARTS = ("speed", "real", "skeletons", "clustering")
+
+
+def merged(old: dict, new: dict, meta: dict) -> dict:
+    "`old` results with the parts of `new` put in; a clustering table is merged row by row; the run noted under 'updates'."
+    out = dict(old)
+    for k, v in new.items():
+        if k == "clustering" and "clustering" in old:
+            if (v["scans"], v["points"]) != (old["clustering"].get("scans"), old["clustering"].get("points")):
+                raise SystemExit(f"refusing to merge clustering rows over {v['scans']} scans into a table over {old['clustering'].get('scans')}: "
+                                 "use the same --cluster-scans")
+            c = dict(old["clustering"]); c.update({kk: vv for kk, vv in v.items() if kk != "table"})
+            c["table"] = dict(old["clustering"]["table"], **v["table"])
+            out["clustering"] = c
+        else: out[k] = v
+    out["updates"] = old.get("updates", []) + [dict(meta, parts={k: sorted(v["table"]) if k == "clustering" else "all" for k, v in new.items()})]
+    return out
 
 
 def main():
@@ -130,21 +166,31 @@ def main():
     ap.add_argument("--trees-per-species", type=int, default=2)
     ap.add_argument("--cluster-scans", type=int, default=12)
     ap.add_argument("--skip", default="", help="comma list of parts to skip: speed,real,skeletons,clustering")
+    ap.add_argument("--only", default="", help="comma list of the only parts to run (overrides --skip)")
+    ap.add_argument("--cluster-rows", default=",".join(CLUSTER_ROWS), help="comma list of clustering rows: " + ",".join(CLUSTER_ROWS))
+    ap.add_argument("--merge", action="store_true", help="merge the computed parts (and clustering rows) into the existing --out file")
+    ap.add_argument("--threads", type=int, default=2, help="torch threads")
     ap.add_argument("--out", default=str(root / "results" / "reconstruct.json"))
     a = ap.parse_args()
-    import torch; torch.set_num_threads(2)
+    import torch; torch.set_num_threads(a.threads)
     methods = ["classic"] + (["partnet"] if Path(a.weights).exists() else [])
     skip = set(a.skip.split(","))
+    if a.only: skip = set(PARTS) - set(a.only.split(","))
+    rows = tuple(r for r in a.cluster_rows.split(",") if r)
+    if bad := sorted(set(skip | set(a.only.split(",") if a.only else ())) - set(PARTS) - {""}): raise SystemExit(f"unknown parts {bad}: choose from {PARTS}")
+    if bad := sorted(set(rows) - set(CLUSTER_ROWS)): raise SystemExit(f"unknown clustering rows {bad}: choose from {CLUSTER_ROWS}")
     res = {}
     if "speed" not in skip: res["speed"] = speed(a.weights, methods); print(json.dumps(res["speed"]))
     if "real" not in skip: res["real_scans"] = real_scans(a.weights, methods); print(json.dumps(res["real_scans"], indent=0))
     if "skeletons" not in skip: res["skeletons"] = skeletons(a.weights, methods, a.trees_per_species); print(json.dumps(res["skeletons"]["summary"]))
-    if "clustering" not in skip and "partnet" in methods: res["clustering"] = clustering(a.weights, a.cluster_scans); print(json.dumps(res["clustering"]))
+    if "clustering" not in skip and "partnet" in methods: res["clustering"] = clustering(a.weights, a.cluster_scans, rows); print(json.dumps(res["clustering"]))
     try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
     except OSError: commit = "?"
     meta = dict(command="python benchmarks/reconstruct.py " + " ".join(sys.argv[1:]), commit=commit,
                 machine=f"{platform.machine()}, {os.cpu_count()} cores (shared with other jobs), {platform.python_version()}")
-    _atomic_write(Path(a.out), lambda f: f.write(json.dumps(dict(meta, **res), indent=1).encode()))
+    if a.merge and Path(a.out).exists(): res = merged(json.loads(Path(a.out).read_text()), res, meta)
+    else: res = dict(meta, **res)
+    _atomic_write(Path(a.out), lambda f: f.write(json.dumps(res, indent=1).encode()))
     print("wrote", a.out)
 
 

@@ -24,7 +24,7 @@ from .pointnet2 import PointNet2, gather, mlp
 # %% auto #0
 __all__ = ['PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example', 'PartNetConfig',
            'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds', 'segment', 'save_partnet',
-           'load_partnet', 'merge_scores', 'cluster_scores']
+           'load_partnet', 'merge_scores', 'cluster_scores', 'som_clusters']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -239,3 +239,20 @@ def cluster_scores(pred, true) -> dict:
     p, t = np.asarray(pred), np.asarray(true)
     ok = t >= 0
     return dict(ri=float(rand_score(t[ok], p[ok])), nmi=float(normalized_mutual_info_score(t[ok], p[ok])), clusters=int(len(np.unique(p[ok]))))
+
+# %% ../nbs/09a_partnet.ipynb #b0e0ad3d
+def som_clusters(points, n_clusters: int, iterations: int = 20_000, sigma: float = 1.0, learning_rate: float = 0.5, seed: int = 0) -> np.ndarray:
+    "Cluster label (n,) of each of `points` (n, d): its nearest neuron of a self-organising map of about `n_clusters` neurons (minisom)."
+    try: from minisom import MiniSom
+    except ImportError: raise TreebookError("the SOM baseline needs minisom: pip install minisom") from None
+    p = np.asarray(points, np.float64)
+    if p.ndim != 2 or not len(p) or not np.isfinite(p).all(): raise TreebookError(f"points must be a finite (n, d) array with n >= 1, got shape {p.shape}")
+    if not isinstance(n_clusters, (int, np.integer)) or not 1 <= n_clusters <= len(p):
+        raise TreebookError(f"n_clusters must be a whole number in 1..{len(p)} (the number of points), got {n_clusters!r}")
+    if not isinstance(iterations, (int, np.integer)) or iterations < 1: raise TreebookError(f"iterations must be a whole number >= 1, got {iterations!r}")
+    rows = max(1, int(np.floor(np.sqrt(n_clusters)))); cols = int(np.ceil(n_clusters / rows))
+    som = MiniSom(rows, cols, p.shape[1], sigma=sigma, learning_rate=learning_rate, random_seed=seed)
+    som.random_weights_init(p)
+    som.train_random(p, int(iterations))
+    near = cKDTree(som.get_weights().reshape(-1, p.shape[1])).query(p)[1]
+    return np.unique(near, return_inverse=True)[1].reshape(-1)
