@@ -20,7 +20,7 @@ from tqdm.auto import tqdm
 from .tree import Tree, TreebookError, _atomic_write
 from .tokens import BLOCK, COND, EOS, N_VALUES, PAD, SOS, STAGE, Tokenizer
 from .hourglass import DecodeState, ModelConfig, TreeTransformer
-from .sampling import TreeGrammar, pick
+from .sampling import TreeGrammar, pick, pick_block
 
 # %% auto #0
 __all__ = ['GROWTH_MODES', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar', 'condition_prefix',
@@ -174,19 +174,6 @@ class StagedGrammar(TreeGrammar):
         super().observe(tokens, u)
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #018dd5bd
-def _pick_block(logits, ok, temperature, top_k, top_p, gen):
-    "At a block start: branch, [STAGE] or [EOS] drawn at the model's own odds; a branch's first token then as `pick` draws it."
-    allowed = torch.from_numpy(ok)
-    probs = logits.masked_fill(~allowed, float("-inf")).softmax(-1)
-    special = torch.zeros_like(allowed); special[:, N_VALUES:] = True
-    value = torch.rand(len(probs), generator=gen) < probs[:, :N_VALUES].sum(-1)
-    out = torch.empty(len(probs), dtype=torch.long)
-    if value.any(): out[value] = pick(logits[value], allowed[value] & ~special[value], temperature, top_k, top_p, gen)
-    if (~value).any():
-        sp = probs[~value].masked_fill(~special[~value], 0)
-        out[~value] = torch.multinomial(sp / sp.sum(-1, keepdim=True), 1, generator=gen)[:, 0]
-    return out
-
 @contextmanager
 def condition_prefix(model: TreeTransformer, prefix=None):
     "Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8)."
@@ -247,7 +234,7 @@ def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None,
             ok[ending] = False; ok[ending, EOS] = True
             ok[done] = False; ok[done, PAD] = True
             if fair_stops and temperature > 0 and (t - P0) % BLOCK == 0 and t - P0 >= 2 * BLOCK:
-                nxt = _pick_block(logits, ok, temperature, top_k, top_p, gen)
+                nxt = pick_block(logits, ok, temperature, top_k, top_p, gen, N_VALUES)
             else: nxt = pick(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen)
             seqs[:, t] = nxt
             if grammar: grammar.observe(nxt.numpy(), t)

@@ -15,7 +15,7 @@ from .tree import TreebookError
 from .hourglass import DecodeState, TreeTransformer
 
 # %% auto #0
-__all__ = ['CONTRACT', 'pick', 'TreeGrammar', 'token_connectivity', 'sample']
+__all__ = ['CONTRACT', 'pick', 'pick_block', 'TreeGrammar', 'token_connectivity', 'sample']
 
 # %% ../nbs/04a_sampling.ipynb #ac396765
 def pick(logits, allowed=None, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
@@ -33,6 +33,25 @@ def pick(logits, allowed=None, temperature: float = 1.0, top_k: int | None = Non
     cum = logits.softmax(-1).cumsum(-1)                 # inverse-CDF draw: one uniform per row, far cheaper than multinomial
     u = (1 - torch.rand(len(cum), 1, generator=generator)) * cum[:, -1:]         # in (0, total]: never a zero-probability token
     return (cum < u).sum(-1).clamp_(max=cum.shape[-1] - 1)
+
+# %% ../nbs/04a_sampling.ipynb #0bab7a15
+def pick_block(logits, allowed, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
+               generator: torch.Generator | None = None, n_values: int = 256):
+    "`pick` at a group start: a value token vs a special one ([EOS], [STAGE]) at the model's own odds, then the token itself."
+    allowed = torch.as_tensor(allowed, dtype=torch.bool)
+    probs = logits.masked_fill(~allowed, float("-inf")).softmax(-1)
+    special = torch.zeros_like(allowed); special[:, n_values:] = True
+    go_on = torch.rand(len(probs), generator=generator) < probs[:, :n_values].sum(-1)
+    go_on &= (allowed & ~special).any(-1)
+    out = torch.empty(len(probs), dtype=torch.long)
+    if go_on.any(): out[go_on] = pick(logits[go_on], (allowed & ~special)[go_on], temperature, top_k, top_p, generator)
+    stop = ~go_on
+    if stop.any():
+        sp = probs[stop].masked_fill(~special[stop], 0)
+        none = sp.sum(-1) <= 0                      # rows with no special token allowed: fall back on the plain draw
+        sp[none] = probs[stop][none]
+        out[stop] = torch.multinomial(sp / sp.sum(-1, keepdim=True), 1, generator=generator)[:, 0]
+    return out
 
 # %% ../nbs/04a_sampling.ipynb #3fa8857d
 CONTRACT = SimpleNamespace(sos=256, eos=257, pad=258, stage=259, n_values=256, vocab_size=264)  # the token contract
@@ -97,7 +116,7 @@ def token_connectivity(seq, tok) -> float:
 @torch.no_grad()
 def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len: int | None = None,
            min_len: int = 0, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
-           structure: bool = True, cache: bool = True, seed: int = 0, progress: bool = False, return_logits: bool = False):
+           structure: bool = True, fair_stops: bool = True, cache: bool = True, seed: int = 0, progress: bool = False, return_logits: bool = False):
     "Sample `n` token sequences from `model`; returns a list of int64 arrays (and the logits (n, steps, V) if asked)."
     c, tk = model.config, tok if tok is not None else CONTRACT
     if structure and not hasattr(tk, "root_tokens"):
@@ -137,7 +156,9 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
         if t < min_len: ok[ok.sum(1) > 1, tk.eos] = False     # no [EOS] yet, unless it is the only choice
         ok[ending] = False; ok[ending, tk.eos] = True
         ok[done] = False; ok[done, tk.pad] = True
-        nxt = pick(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen)
+        if fair_stops and temperature > 0 and t % 8 == 0 and t >= 16 and (temperature != 1 or top_k or (top_p or 1) < 1):
+            nxt = pick_block(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen, tk.n_values)
+        else: nxt = pick(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen)
         seqs[:, t] = nxt
         if grammar: grammar.observe(nxt.numpy(), t)
         eos = (nxt.numpy() == tk.eos) & ~done
