@@ -18,7 +18,8 @@ from .pointio import read_points
 
 # %% auto #0
 __all__ = ['METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph', 'level_set_skeleton',
-           'sample_skeleton', 'skeleton_distance', 'coverage', 'wood_points', 'reconstruct', 'demo_reconstruct']
+           'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'point_labels', 'wood_points',
+           'reconstruct', 'demo_reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -120,8 +121,8 @@ def _circle_fit(p, c, t) -> tuple:
     a, b = sol[0] / 2, sol[1] / 2
     return c + a * u + b * v, float(np.sqrt(max(sol[2] + a * a + b * b, 0.0)))
 
-def level_set_skeleton(points, bin_size: float | None = None, labels=None, k: int = 10, min_points: int = 3) -> tuple:
-    "(Tree of the skeleton, node id of each point (-1 dropped)) for points (n, 3) with z up, optionally split by `labels` (n,)."
+def level_set_skeleton(points, bin_size: float | None = None, labels=None, k: int = 10, min_points: int = 3, segments: bool = False) -> tuple:
+    "(Tree of the skeleton, node id of each point (-1 dropped), or with `segments` its segment index) for points (n, 3) with z up, optionally split by `labels` (n,)."
     points = np.asarray(points, np.float64)
     g, idx, root = neighbour_graph(points, k)
     q = points[idx]
@@ -193,7 +194,69 @@ def level_set_skeleton(points, bin_size: float | None = None, labels=None, k: in
         start.append(np.r_[cen[par[i]], rad[par[i]]]); end.append(np.r_[cen[i], rad[i]]); parent.append(seg[par[i]])
     tree = Tree(np.array(start, np.float32), np.array(end, np.float32), np.array(parent), tol=1e-3 * max(diag, 1e-9) + 1e-4)
     full = np.full(len(points), -1); full[idx] = node
+    if segments:  # a node's points sit around its centre, the end of its segment
+        of = np.full(m + 1, -1); of[list(seg)] = list(seg.values())
+        full = of[full]
     return tree, full
+
+# %% ../nbs/09b_reconstruct.ipynb #472bb647
+def _turns(tree: Tree) -> np.ndarray:
+    "Turn (degrees) at the start of each branch: angle between its parent's direction and its own (0 for roots and zero lengths)."
+    d = (tree.end[:, :3] - tree.start[:, :3]).astype(np.float64)
+    p = np.maximum(tree.parent, 0)
+    n = np.linalg.norm(d, axis=1)
+    cos = (d * d[p]).sum(1) / np.maximum(n * n[p], 1e-300)
+    return np.where((tree.parent >= 0) & (n > 0) & (n[p] > 0), np.degrees(np.arccos(np.clip(cos, -1, 1))), 0.0)
+
+def _hermite(s, p0, p1, m0, m1, deriv: bool = False) -> np.ndarray:
+    "Cubic Hermite curve (or its derivative) at parameters `s` (k,) from `p0` (tangent `m0`) to `p1` (tangent `m1`)."
+    s = np.asarray(s, np.float64)[:, None]
+    if deriv: h = (6 * s**2 - 6 * s, 3 * s**2 - 4 * s + 1, 6 * s - 6 * s**2, 3 * s**2 - 2 * s)
+    else: h = (2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, 3 * s**2 - 2 * s**3, s**3 - s**2)
+    return h[0] * p0 + h[1] * m0 + h[2] * p1 + h[3] * m1
+
+def hermite_joins(tree: Tree, max_angle: float = 120.0, pieces: int = 6, return_index: bool = False):
+    "`tree` with each child whose turn from its parent exceeds `max_angle` degrees joined by a Hermite curve of `pieces` segments."
+    if not isinstance(tree, Tree): raise TreebookError(f"hermite_joins needs a Tree, got {type(tree).__name__}")
+    if not (isinstance(max_angle, (int, float, np.integer, np.floating)) and 0 < max_angle < 180):
+        raise TreebookError(f"max_angle must be a number of degrees in (0, 180), got {max_angle!r}")
+    if not isinstance(pieces, (int, np.integer)) or pieces < 2: raise TreebookError(f"pieces must be a whole number >= 2, got {pieces!r}")
+    S, E = tree.start.astype(np.float64), tree.end.astype(np.float64)
+    start, end, parent, src = [], [], [], []
+    last = np.full(tree.n, -1, np.int64)  # the new segment that ends where each old one ended
+    dense = np.linspace(0, 1, 257)
+    for i in range(tree.n):  # parents come first
+        p = int(tree.parent[i])
+        a, b = S[i], E[i]
+        L = float(np.linalg.norm(b[:3] - a[:3]))
+        tp = end[last[p]][:3] - start[last[p]][:3] if p >= 0 else np.zeros(3)
+        ntp = float(np.linalg.norm(tp))
+        sharp = p >= 0 and L > 0 and ntp > 0 and np.degrees(np.arccos(np.clip(tp @ (b[:3] - a[:3]) / (ntp * L), -1, 1))) > max_angle
+        if not sharp:
+            start.append(a); end.append(b); parent.append(last[p] if p >= 0 else -1); src.append(i); last[i] = len(start) - 1
+            continue
+        m0, m1 = 0.5 * L * tp / ntp, 0.5 * (b[:3] - a[:3])
+        P, V = _hermite(dense, a[:3], b[:3], m0, m1), _hermite(dense, a[:3], b[:3], m0, m1, deriv=True)
+        V /= np.maximum(np.linalg.norm(V, axis=1, keepdims=True), 1e-300)
+        turn = np.r_[0, np.cumsum(np.arccos(np.clip((V[1:] * V[:-1]).sum(1), -1, 1)))]
+        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
+        u = 0.7 * turn / max(turn[-1], 1e-300) + 0.3 * arc / max(arc[-1], 1e-300)
+        s = np.interp(np.linspace(0, 1, pieces + 1), u, dense)
+        pts = _hermite(s, a[:3], b[:3], m0, m1)
+        pts[0], pts[-1] = a[:3], b[:3]
+        keep = [0]  # drop points closer than L / 1000 to their neighbours (a near-reversal turns in a speck)
+        for k in range(1, pieces):
+            if min(np.linalg.norm(pts[k] - pts[keep[-1]]), np.linalg.norm(pts[-1] - pts[k])) >= 1e-3 * L: keep.append(k)
+        keep.append(pieces)
+        pts, r = pts[keep], a[3] + (b[3] - a[3]) * s[keep]
+        for k in range(len(keep) - 1):
+            start.append(np.r_[pts[k], r[k]]); end.append(np.r_[pts[k + 1], r[k + 1]])
+            parent.append(last[p] if k == 0 else len(start) - 2); src.append(i)
+        last[i] = len(start) - 1
+    src = np.array(src, np.int64)
+    out = Tree(np.array(start, np.float32), np.array(end, np.float32), np.array(parent, np.int64), check=False,
+               **{k: v[src] for k, v in tree.attrs.items()})
+    return (out, last) if return_index else out
 
 # %% ../nbs/09b_reconstruct.ipynb #8a42ad93
 def sample_skeleton(tree: Tree, step: float) -> np.ndarray:
@@ -222,6 +285,24 @@ def coverage(points, mesh, tol: float = 0.01) -> float:
     d = scene.compute_distance(o3d.core.Tensor(p.astype(np.float32))).numpy()
     return float((d <= tol * _diag(p)).mean())
 
+# %% ../nbs/09b_reconstruct.ipynb #ad5964bb
+def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000) -> np.ndarray:
+    "Label (n,) of each of `points`: that of its nearest point of `kept` with a label >= 0, or -1 if none lies within `radius`."
+    p, q, lab = np.asarray(points, np.float64), np.asarray(kept, np.float64), np.asarray(kept_labels)
+    if p.ndim != 2 or p.shape[1] != 3 or q.ndim != 2 or q.shape[1] != 3: raise TreebookError(f"points and kept must be (n, 3) arrays, got {p.shape} and {q.shape}")
+    if len(lab) != len(q): raise TreebookError(f"kept_labels must have one label per kept point ({len(q)}), got {len(lab)}")
+    if not radius > 0: raise TreebookError(f"radius must be > 0, got {radius!r}")
+    if not isinstance(chunk, (int, np.integer)) or chunk < 1: raise TreebookError(f"chunk must be a whole number >= 1, got {chunk!r}")
+    ok = np.flatnonzero(lab >= 0)
+    out = np.full(len(p), -1, np.int64)
+    if not len(ok): return out
+    kd = cKDTree(q[ok])
+    for a in range(0, len(p), chunk):
+        d, j = kd.query(p[a:a + chunk], distance_upper_bound=radius)
+        hit = np.isfinite(d)
+        out[a:a + chunk][hit] = lab[ok[j[hit]]]
+    return out
+
 # %% ../nbs/09b_reconstruct.ipynb #df6de7ad
 def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
     "Mask of points whose `k`-neighbourhood is linear enough to be wood (a geometric stand-in for a foliage classifier)."
@@ -234,11 +315,12 @@ def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
 METHODS = ("partnet", "classic")
 
 def reconstruct(points, method: str = "partnet", up: str = "z", foliage: bool = False, seed: int = 0, bin_size: float | None = None,
-                max_points: int = 60_000, ground: bool = True, weights=None, return_info: bool = False):
+                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False):
     "A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units."
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     t0 = time.perf_counter()
-    p = prepare_points(points, up=up, max_points=max_points, ground=ground, seed=seed)
+    raw = read_points(points, up=up)
+    p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed)
     if foliage:
         w = wood_points(p)
         if w.mean() >= 0.2: p = p[w]
@@ -247,9 +329,17 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage: bool = 
         from treebook.partnet import load_partnet, segment
         seg = segment(load_partnet(weights), p, seed=seed, threshold=0.7, neighbours=4)
         labels = seg["branch"]
-    tree, node = level_set_skeleton(p, bin_size=bin_size, labels=labels)
+    tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True)
+    last, joins = np.arange(tree.n), 0
+    if hermite:
+        joins = int((_turns(tree) > 120).sum())
+        tree, last = hermite_joins(tree, return_index=True)
     if not return_info: return tree
-    return tree, dict(points=p, node=node, segmentation=seg, seconds=time.perf_counter() - t0)
+    segment_of = np.where(segment_of >= 0, last[np.maximum(segment_of, 0)], -1)
+    kept = segment_of >= 0
+    spacing = float(np.median(cKDTree(p[kept]).query(p[kept], 2)[0][:, 1])) if kept.sum() > 1 else _diag(p)
+    full = point_labels(raw, p, segment_of, radius=3 * spacing)
+    return tree, dict(points=p, segment=segment_of, labels_full=full, hermite_joins=joins, segmentation=seg, seconds=time.perf_counter() - t0)
 
 # %% ../nbs/09b_reconstruct.ipynb #c15bc628
 SHIPPED_SCAN = Path(__file__).parent / "data" / "scans" / "tree13.xyz" if "__file__" in globals() else Path("../treebook/data/scans/tree13.xyz")
