@@ -76,8 +76,11 @@ def test_million_points(tree_scan):
     rng = np.random.default_rng(0)
     big = np.repeat(pts, 125, axis=0) + rng.normal(0, 0.002, (len(pts) * 125, 3))
     assert len(big) == 1_000_000
-    t = reconstruct(big, method="classic", max_points=20_000)
+    t, info = reconstruct(big, method="classic", max_points=20_000, return_info=True)
     one_tree(t)
+    lab = info["labels_full"]  # one segment per input point, in full resolution
+    assert lab.shape == (1_000_000,) and lab.max() < t.n
+    assert (lab >= 0).mean() > 0.95
 
 
 @pytest.mark.parametrize("name", ["tree13.xyz", "tree7.xyz"])
@@ -98,3 +101,13 @@ def test_demo(tmp_path):
     paths = demo_reconstruct(tmp_path, method="classic")
     assert all(p.exists() and p.stat().st_size > 0 for p in paths)
     one_tree(Tree.load(paths[0]))
+
+
+def test_hermite_switch(tree_scan):
+    from treebook.reconstruct import _turns
+    _, pts = tree_scan
+    plain = reconstruct(pts, method="classic", hermite=False)
+    joined = reconstruct(pts, method="classic")
+    one_tree(joined)
+    assert (_turns(joined) > 120).sum() <= (_turns(plain) > 120).sum()
+    np.testing.assert_allclose(joined.bounds(), plain.bounds(), atol=0.05 * plain.size)
