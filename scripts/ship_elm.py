@@ -19,9 +19,9 @@ from tqdm.auto import tqdm
 
 root = Path(__file__).resolve().parent.parent
 _W = {}
-def _init(run):
+def _init(run, ckpt="best.pt"):
     torch.set_num_threads(1)
-    _W["net"], _W["tok"] = TreeTransformer.load(Path(run) / "best.pt"), Tokenizer.load(Path(run) / "tokenizer.json")
+    _W["net"], _W["tok"] = TreeTransformer.load(Path(run) / ckpt), Tokenizer.load(Path(run) / "tokenizer.json")
 def _draw(job):
     seed, n, structure, temperature, top_p = job
     return sample(_W["net"], n, tok=_W["tok"], temperature=temperature, top_p=top_p, structure=structure, min_len=24, seed=seed)
@@ -35,11 +35,13 @@ def main():
     p.add_argument("--temperature", type=float, default=0.9); p.add_argument("--top-p", type=float, default=0.95)
     p.add_argument("--threads", type=int, default=2); p.add_argument("--workers", type=int, default=2)
     p.add_argument("--limit", type=int, default=None, help="use only this many test and training trees (smoke test)"); p.add_argument("--no-ship", action="store_true")
+    p.add_argument("--ckpt", default="best.pt", help="checkpoint in the run folder to evaluate (and ship)")
+    p.add_argument("--out-json", default="results/elm_eval.json", help="where the figures go (a quick check: somewhere else)")
     a = p.parse_args()
     torch.set_num_threads(a.threads)
     run = Path(a.run)
-    net, tok = TreeTransformer.load(run / "best.pt"), Tokenizer.load(run / "tokenizer.json")
-    ck = torch.load(run / "best.pt", weights_only=True)["meta"]
+    net, tok = TreeTransformer.load(run / a.ckpt), Tokenizer.load(run / "tokenizer.json")
+    ck = torch.load(run / a.ckpt, weights_only=True)["meta"]
     state = torch.load(run / "last.pt", weights_only=True)
     test, train = load_trees(a.data, "test"), load_trees(a.data, "train")
     if a.limit: test, train = test[:a.limit], train[:a.limit]  # a smoke test only
@@ -57,7 +59,7 @@ def main():
     t = time.time()
     jobs = [(i, min(a.batch, a.n_samples - i), True) for i in range(0, a.n_samples, a.batch)]
     jobs += [(10**6 + i, min(a.batch, a.n_connect - i), False) for i in range(0, a.n_connect, a.batch)]
-    with ProcessPoolExecutor(a.workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init, initargs=(str(run),)) as ex:  # one thread each: see sample_trees
+    with ProcessPoolExecutor(a.workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init, initargs=(str(run), a.ckpt)) as ex:  # one thread each: see sample_trees
         done = list(tqdm(ex.map(_draw, [(a.seed + i, n, st, a.temperature, a.top_p) for i, n, st in jobs]), total=len(jobs), desc="sampling"))
     seqs = [s for (i, n, st), d in zip(jobs, done) if st for s in d]
     free = [s for (i, n, st), d in zip(jobs, done) if not st for s in d]
@@ -79,12 +81,13 @@ def main():
     res["targets"] = {"Connect_structure == 1.0": res["Connect_structure"]["Connect"] == 1.0, "Connect_free >= 0.9": res["Connect_free"]["Connect"] >= 0.9,
                       "Unique == 1.0": s["Unique"] == 1.0, "Novel == 1.0": s["Novel"] == 1.0, "1-NNA <= 0.75": s["1-NNA"] <= 0.75,
                       "COV-CD >= 0.40": s["COV-CD"] >= 0.40, "MMD-CD <= 1.5x train-vs-test": s["MMD-CD"] <= 1.5 * r["MMD-CD"]}
-    (root / "results").mkdir(exist_ok=True)
-    (root / "results" / "elm_eval.json").write_text(json.dumps(res, indent=1))
+    out_json = root / a.out_json
+    out_json.parent.mkdir(parents=True, exist_ok=True)
+    out_json.write_text(json.dumps(res, indent=1))
     print(json.dumps(res, indent=1))
-    shutil.copyfile(run / "loss.png", root / "results" / "elm_loss.png"); shutil.copyfile(run / "log.csv", root / "results" / "elm_log.csv")
     if not a.no_ship:
-        shutil.copyfile(run / "best.pt", WEIGHTS / "elm.pt"); shutil.copyfile(run / "tokenizer.json", WEIGHTS / "elm.tok.json")
+        shutil.copyfile(run / "loss.png", root / "results" / "elm_loss.png"); shutil.copyfile(run / "log.csv", root / "results" / "elm_log.csv")
+        shutil.copyfile(run / a.ckpt, WEIGHTS / "elm.pt"); shutil.copyfile(run / "tokenizer.json", WEIGHTS / "elm.tok.json")
         ar = state["args"]
         rows = "\n".join(f"| {k} | {s[k]:.4g} | {r.get(k, float('nan')):.4g} |" for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD") ) + \
                f"\n| Novel | {s['Novel']:.4g} | - |"
