@@ -6,9 +6,12 @@ cd "$(dirname "$0")/.."
 PY=${PY:-.venv/bin/python}
 # 1. 10,000 procedural elms (<= 200 branches), 9,000 train / 1,000 test by the dataset's split; resumable.
 $PY -c "from treebook.datasets import generate_dataset; generate_dataset('elm', 10000, 'data/elm', max_branches=200, workers=2, seed=0)"
-# 2. Train DFS / Full. dim 128, 8 layers, 4 heads (1.6 M parameters), batch 8, 330 steps: what two shared CPU cores manage in ~100 minutes.
-RESUME=""; [ -f runs/elm/last.pt ] && RESUME="--resume"
-$PY -m treebook.train --data data/elm --out runs/elm --order dfs --arch full --dim 128 --depth 8 --heads 4 \
-    --batch-size 8 --steps 330 --lr 2e-3 --warmup 30 --val-every 66 --val-trees 128 --ckpt-every 10 --threads 2 --seed 0 $RESUME
+# 2. Train DFS / Full. dim 128, 8 layers, 4 heads (1.6 M parameters), batch 16, a 4,000-step schedule; each call stops after
+#    100 minutes (--time-limit 6000): run the script again to resume where it stopped.
+RUN=${RUN:-runs/elm2}
+RESUME=""; [ -f $RUN/last.pt ] && RESUME="--resume"
+$PY -m treebook.train --data data/elm --out $RUN --order dfs --arch full --dim 128 --depth 8 --heads 4 \
+    --batch-size 16 --steps 4000 --lr 2e-3 --warmup 100 --val-every 500 --val-trees 128 --ckpt-every 50 --time-limit 6000 \
+    --threads 2 --seed 0 --quiet $RESUME
 # 3. Evaluate best.pt on the held-out 1,000 and write the model card + weights into the package.
-$PY scripts/ship_elm.py --run runs/elm --data data/elm
+$PY scripts/ship_elm.py --run $RUN --data data/elm
