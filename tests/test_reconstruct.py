@@ -111,3 +111,68 @@ def test_hermite_switch(tree_scan):
     one_tree(joined)
     assert (_turns(joined) > 120).sum() <= (_turns(plain) > 120).sum()
     np.testing.assert_allclose(joined.bounds(), plain.bounds(), atol=0.05 * plain.size)
+
+
+# --- the ground: small, sloped, rough, with outliers under it, in millimetres, or absent ---
+
+def ground_disc(pts, n, seed=0, slope=0.0, rough=0.002, below=0, radius=0.6):
+    "A ground disc of `n` points under the trunk at the origin (radius a share of the tree's width), with `below` outliers under it."
+    g = np.random.default_rng(seed)
+    h, r = float(np.ptp(pts[:, 2])), radius * float(np.ptp(pts[:, :2], 0).max())
+    a, rr = g.uniform(0, 2 * np.pi, n), r * np.sqrt(g.uniform(0, 1, n))
+    x, y = rr * np.cos(a), rr * np.sin(a)
+    ground = np.column_stack([x, y, np.tan(np.radians(slope)) * x + g.normal(0, rough * h, n)])
+    under = np.column_stack([g.uniform(-r, r, (below, 2)), -g.uniform(0.05, 0.3, below) * h])
+    return np.vstack([ground, under])
+
+
+@pytest.fixture(scope="module")
+def small_scan():
+    t = example_tree(levels=4, seed=3)
+    assert np.allclose(t.start[0, :3], 0)  # the trunk stands on the origin
+    sc = scan(t, n_points=6000, seed=1, noise=0.002, outliers=0.0)
+    return t, sc.points.astype(np.float64)
+
+
+@pytest.mark.parametrize("kind, kw", [("small", dict(n=4000)), ("outliers under", dict(n=6000, below=120)),
+                                      ("sloped rough", dict(n=6000, slope=5, rough=0.006)), ("small disc", dict(n=1500, radius=0.15))])
+def test_ground_removed(small_scan, kind, kw):
+    from treebook.reconstruct import remove_ground
+    _, pts = small_scan
+    allp = np.vstack([pts, ground_disc(pts, **kw)])
+    for scale, shift in ((1.0, 0.0), (1000.0, np.array([3.5e8, 5.7e9, 2.1e5]))):  # metres, and millimetres far from the origin
+        _, gone = remove_ground(allp * scale + shift)
+        assert gone[len(pts):].mean() > 0.98, kind           # the ground and what lies under it
+        assert 1 - gone[:len(pts)].mean() > 0.97, kind       # the tree, all but its foot
+
+
+@pytest.mark.parametrize("name", ["elm", "hickory", "shadbush", "spruce", "tulip", "vitellaria"])
+def test_no_ground_keeps_the_tree(name):
+    "No ground: the trunk's foot and a crown's base, level and low as they are, are not taken for it."
+    from treebook.botany import grow_tree
+    from treebook.reconstruct import remove_ground
+    sc = scan(grow_tree(name, seed=1), n_points=6000, seed=1, noise=0.002, outliers=0.01)
+    _, gone = remove_ground(sc.points.astype(np.float64))
+    assert 1 - gone[~sc.outlier].mean() > 0.97
+
+
+def test_real_scans_have_no_ground(shared_scans):
+    from treebook.pointio import read_points
+    from treebook.reconstruct import remove_ground
+    paths = [p for p in sorted(shared_scans.glob("*")) if p.suffix in (".xyz", ".las")]
+    if not paths: pytest.skip("no shared scans")
+    for path in paths:
+        assert remove_ground(read_points(path))[1].sum() == 0, path.name
+
+
+def test_ground_y_up_and_reconstruct(small_scan):
+    truth, pts = small_scan
+    allp = np.vstack([pts, ground_disc(pts, 4000, below=80)])
+    yup = np.column_stack([allp[:, 0], allp[:, 2], -allp[:, 1]])
+    assert len(prepare_points(yup, up="y")) < len(pts)  # the ground went
+    t = reconstruct(allp, method="classic")
+    one_tree(t)
+    assert np.linalg.norm(t.start[0, :3] - truth.start[0, :3]) < 0.03 * truth.size  # rooted at the true trunk base
+    assert skeleton_distance(t, truth)["chamfer"] < 5
+    ty = reconstruct(yup, method="classic", up="y")
+    np.testing.assert_allclose(ty.bounds(), t.bounds(), atol=0.01 * truth.size)  # the same up to RANSAC on rotated floats

@@ -24,34 +24,89 @@ __all__ = ['METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_po
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
 
+def _extent(p) -> np.ndarray:
+    "Extent of `p` per axis, ignoring far outliers: the box of the central 99.8% grown by a tenth of its size, within the full box."
+    lo, hi = np.percentile(p[:: max(1, len(p) // 200_000)], [0.1, 99.9], axis=0)
+    return np.minimum(hi + 0.1 * (hi - lo), p.max(0)) - np.maximum(lo - 0.1 * (hi - lo), p.min(0))
+
 def voxel_down(points, max_points: int) -> np.ndarray:
     "`points` thinned on a voxel grid (open3d) until at most `max_points` remain; unchanged if already small enough."
     if len(points) <= max_points: return points
     import open3d as o3d
     pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    vol = np.prod(np.maximum(np.ptp(points, 0), 1e-9 * _diag(points)))
-    v = max((vol / max_points) ** (1 / 3) * 0.3, _diag(points) * 1e-4)
+    ext = _extent(points)
+    vol = np.prod(np.maximum(ext, 1e-9 * np.linalg.norm(ext)))
+    v = max((vol / max_points) ** (1 / 3) * 0.3, np.linalg.norm(ext) * 1e-4)
     for _ in range(60):
         q = np.asarray(pc.voxel_down_sample(v).points)
         if len(q) <= max_points: return q
         v *= 1.25
     return q
 
-def remove_ground(points, seed: int = 0, min_share: float = 0.05) -> tuple:
-    "(points without a ground plane, mask of removed points): the RANSAC plane if horizontal, low and holding >= `min_share`."
+def _plane_fit(p) -> tuple:
+    "(unit normal pointing up, offset e) of the least-squares plane n.x + e = 0 through points `p`."
+    c = p.mean(0)
+    n = np.linalg.svd(p - c, full_matrices=False)[2][2]
+    n = n if n[2] >= 0 else -n
+    return n, -float(n @ c)
+
+def _flat_share(p, rng, k: int = 24, m: int = 2000, max_tilt: float = 35.0) -> float:
+    "Share of (up to `m` sampled) points of `p` whose `k`-neighbourhood in `p` is a surface (not a line) facing up within `max_tilt` degrees."
+    k = min(k, len(p))
+    if k < 5: return 0.0
+    pick = rng.choice(len(p), min(m, len(p)), replace=False)
+    nb = p[cKDTree(p).query(p[pick], k)[1]]
+    nb = nb - nb.mean(1, keepdims=True)
+    ev, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", nb, nb))  # ascending: vec[:, :, 0] is the normal
+    surface = ev[:, 1] >= 0.1 * ev[:, 2]
+    up = np.abs(vec[:, 2, 0]) >= np.cos(np.radians(max_tilt))
+    return float((surface & up).mean())
+
+def remove_ground(points, seed: int = 0, min_share: float = 0.05, max_tilt: float = 25.0, max_under: float = 0.005,
+                  tries: int = 5, return_plane: bool = False) -> tuple:
+    "(points without the ground, mask of removed points[, plane (unit normal, offset) or None]): the largest of `tries` RANSAC planes of the lowest slab that passes the tests in the text."
+    p = np.asarray(points, np.float64)
+    if p.ndim != 2 or p.shape[1] != 3: raise TreebookError(f"points must be an (n, 3) array, got shape {p.shape}")
+    for name, v, hi_ in (("min_share", min_share, 1), ("max_tilt", max_tilt, 90), ("max_under", max_under, 1)):
+        if not (isinstance(v, (int, float, np.integer, np.floating)) and 0 < v < hi_): raise TreebookError(f"{name} must be a number in (0, {hi_}), got {v!r}")
+    if not isinstance(tries, (int, np.integer)) or tries < 1: raise TreebookError(f"tries must be a whole number >= 1, got {tries!r}")
+    none = (p, np.zeros(len(p), bool)) + ((None,) if return_plane else ())
+    if len(p) < 30: return none
     import open3d as o3d
-    o3d.utility.random.seed(seed)
-    pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-    d = _diag(points)
-    plane, inl = pc.segment_plane(distance_threshold=0.01 * d, ransac_n=3, num_iterations=300)
-    a, b, c, e = plane
-    gone = np.zeros(len(points), bool)
-    n = np.array([a, b, c]) / max(np.linalg.norm([a, b, c]), 1e-12)
-    z0, z1 = points[:, 2].min(), points[:, 2].max()
-    if len(inl) >= min_share * len(points) and abs(n[2]) > 0.95 and np.median(points[inl, 2]) < z0 + 0.15 * (z1 - z0):
-        side = (points @ n + e / max(np.linalg.norm([a, b, c]), 1e-12)) * np.sign(n[2])  # height above the plane
-        gone = side < 0.015 * d
-    return points[~gone], gone
+    rng = np.random.default_rng(seed)
+    s = p[np.sort(rng.choice(len(p), 50_000, replace=False))] if len(p) > 50_000 else p  # the search runs on a sample
+    dk = cKDTree(s).query(s, 9)[0][:, -1]
+    lone = dk > 3 * np.median(dk)                               # isolated points: outliers, ignored by the tests
+    lo, hi = np.percentile(s[~lone], [1, 99], axis=0)           # robust box of the rest
+    c0 = (lo + hi) / 2
+    s, lo, hi = s - c0, lo - c0, hi - c0                        # centred: millimetres far from the origin stay exact
+    d, h = float(np.linalg.norm(hi - lo)), float(hi[2] - lo[2])
+    if not d > 0 or not h > 0: return none
+    t = 0.01 * d                                                # RANSAC inlier distance
+    rest = s[s[:, 2] <= lo[2] + 0.4 * h]                        # search the lowest 40% of the robust height only
+    o3d.utility.random.seed(int(seed))
+    best = None
+    for _ in range(tries):
+        if len(rest) < max(30, min_share * len(s)): break
+        _, inl = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(rest)).segment_plane(distance_threshold=t, ransac_n=3, num_iterations=500)
+        inl = np.asarray(inl)
+        cand, rest = rest[inl], np.delete(rest, inl, axis=0)
+        if len(inl) < min_share * len(s): break                 # later planes are smaller still
+        n, e = _plane_fit(cand)
+        if np.degrees(np.arccos(min(n[2], 1.0))) > max_tilt: continue   # not level: a trunk, a wall
+        ht = s @ n + e                                          # height of every point above the plane
+        near = np.abs(ht) <= t
+        if near.mean() < min_share: continue                    # too small a share to be the ground
+        if np.median(s[near, 2]) > lo[2] + 0.25 * h: continue  # not in the lower quarter of the cloud
+        r = ht[near]
+        thick = float(np.clip(4 * 1.4826 * np.median(np.abs(r - np.median(r))), 0.005 * d, 0.015 * d))
+        if (~lone & (ht < -max(3 * thick, 0.05 * h))).mean() > max_under: continue  # a structure (a trunk) under it
+        if _flat_share(s[near], rng) < 0.3: continue            # not a surface facing up: the foot of a trunk
+        if best is None or near.sum() > best[0]: best = (int(near.sum()), n, e, thick)
+    if best is None: return none
+    _, n, e, thick = best
+    gone = (p - c0) @ n + e < thick                             # on the plane, and everything below it (outliers under the ground)
+    return (p[~gone], gone) + (((n, e - float(n @ c0)),) if return_plane else ())
 
 def prepare_points(src, up: str = "z", max_points: int = 60_000, ground: bool = True, seed: int = 0) -> np.ndarray:
     "Points (m, 3) float64 ready to reconstruct: read and checked, not planar, thinned to `max_points`, ground removed."
