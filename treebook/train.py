@@ -249,7 +249,7 @@ def load_pretrained(model: str = "elm"):
         raise TreebookError(f"no tokenizer beside {pt}: expected {Path(pt).with_suffix('.tok.json').name} or tokenizer.json")
     return TreeTransformer.load(pt), Tokenizer.load(tok_path)
 
-def sample_trees(n: int = 16, model: str = "elm", temperature: float = 0.9, top_p: float | None = 0.95, top_k: int | None = None,
+def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None, top_k: int | None = None,
                  seed: int = 0, structure: bool = True, progress: bool = False) -> list:
     "`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure` keeps every tree connected."
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
