@@ -14,4 +14,4 @@ $PY -m treebook.train --data data/elm --out $RUN --order dfs --arch full --dim 1
     --batch-size 16 --steps 4000 --lr 2e-3 --warmup 100 --val-every 500 --val-trees 128 --ckpt-every 50 --time-limit 6000 \
     --threads 2 --seed 0 --quiet $RESUME
 # 3. Evaluate best.pt on the held-out 1,000 and write the model card + weights into the package.
-$PY scripts/ship_elm.py --run $RUN --data data/elm
+$PY scripts/ship_elm.py --run $RUN --data data/elm --temperature 1.0 --top-p 1.0
