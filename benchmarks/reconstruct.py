@@ -21,7 +21,7 @@ from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.mesh import tree_mesh
 from treebook.pointio import read_points
-from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, branch_chains, normalize_points, merge_seeds,
+from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, affinity_scores, branch_chains, normalize_points, merge_seeds,
                               som_clusters)
 from treebook.reconstruct import reconstruct, coverage, skeleton_distance
 
@@ -93,7 +93,7 @@ def skeletons(weights, methods, per_species):
     return dict(summary=summary, rows=rows)
 
 
-CLUSTER_ROWS = ("ours", "ours_strict", "ours_fine", "mean_shift", "spectral", "dbscan", "som")
+CLUSTER_ROWS = ("ours", "ours_fine", "mean_shift", "spectral", "dbscan", "som")
 
 
 def clustering(weights, n_scans, rows=CLUSTER_ROWS):
@@ -116,14 +116,14 @@ def clustering(weights, n_scans, rows=CLUSTER_ROWS):
             seg = segment(model, p, seed=0)
             if "ours" in rows: res["ours"].append(cluster_scores(seg["branch"], part))
             if "ours_fine" in rows: res["ours_fine"].append(cluster_scores(seg["fine"], part))
-        if "ours_strict" in rows:  # as reconstruct merges
-            res["ours_strict"].append(cluster_scores(segment(model, p, seed=0, threshold=0.7, neighbours=4)["branch"], part))
         if "ours" in rows:  # merging scores on the seeds of this run
             import torch
             with torch.no_grad():
                 out = model(torch.from_numpy(q)[None], seed=0)
-            sb = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy())
-            merge.append(merge_scores(sb, part[out["seed_idx"][0].numpy()]))
+            pairs = out["pairs"][0].numpy()
+            prob = torch.sigmoid(out["affinity"][0]).numpy() * pairs
+            sp = part[out["seed_idx"][0].numpy()]
+            merge.append(merge_scores(merge_seeds(prob), sp) | {f"affinity_{k}": v for k, v in affinity_scores(prob, sp, pairs=pairs).items()})
         if "mean_shift" in rows:
             res["mean_shift"].append(cluster_scores(MeanShift(bandwidth=estimate_bandwidth(q, quantile=0.02, random_state=0), bin_seeding=True).fit_predict(q), part))
         if "spectral" in rows:
@@ -137,7 +137,7 @@ def clustering(weights, n_scans, rows=CLUSTER_ROWS):
     table = {k: {m: round(float(np.mean([r[m] for r in v])), 3) for m in ("ri", "nmi", "clusters")} for k, v in res.items()}
     table["true_parts"] = round(float(np.mean(ks)), 1)
     out = dict(table=table, scans=len(jobs), points=n)
-    if merge: out["merging_full"] = {m: round(float(np.mean([r[m] for r in merge])), 3) for m in ("precision", "recall", "f1")}
+    if merge: out["merging_full"] = {m: round(float(np.mean([r[m] for r in merge])), 3) for m in merge[0]}
     return out
 
 

@@ -23,8 +23,8 @@ from .pointnet2 import PointNet2, gather, mlp
 
 # %% auto #0
 __all__ = ['PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example', 'PartNetConfig',
-           'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds', 'segment', 'save_partnet',
-           'load_partnet', 'merge_scores', 'cluster_scores', 'som_clusters']
+           'neighbour_pairs', 'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds', 'segment',
+           'save_partnet', 'load_partnet', 'merge_scores', 'cluster_scores', 'affinity_scores', 'som_clusters']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -83,6 +83,7 @@ class PartNetConfig:
     n2: int = 128
     width: int = 32
     k_seeds: int = 8
+    pair_neighbours: int = 16
     radii1: tuple = (0.05, 0.1)
     radii2: tuple = (0.1, 0.2)
     nsample: tuple = (16, 32)
@@ -96,6 +97,14 @@ class PartNetConfig:
         names = set(cls.__dataclass_fields__)
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items() if k in names})
 
+def neighbour_pairs(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
+    "(B, S, S) bool: seed pairs where one is among the `k` nearest seeds of the other (all pairs if `k` is 0 or covers them all)."
+    B, S, _ = seed_xyz.shape
+    if k <= 0 or k >= S - 1: return torch.ones(B, S, S, dtype=torch.bool, device=seed_xyz.device)
+    nb = torch.cdist(seed_xyz, seed_xyz).topk(k + 1, dim=-1, largest=False).indices
+    near = torch.zeros(B, S, S, dtype=torch.bool, device=seed_xyz.device).scatter_(2, nb, True)
+    return near | near.transpose(1, 2)
+
 class TreePartNet(nn.Module):
     "PointNet++ with junction, fine-clustering and affinity heads (TreePartNet, section 4)."
     def __init__(self, cfg: PartNetConfig | None = None):
@@ -105,23 +114,20 @@ class TreePartNet(nn.Module):
         C = self.backbone.out_ch
         self.junction = nn.Sequential(mlp([C, C // 2]), nn.Linear(C // 2, 1))
         self.fine = nn.Sequential(mlp([C, C // 2]), nn.Linear(C // 2, 1))
-        if cfg.cosine:
-            self.proj = nn.Linear(C, C)
-            self.a, self.log_s, self.b = (nn.Parameter(torch.tensor(v)) for v in (10.0, float(np.log(10.0)), -5.0))
-        else:
-            self.pair = nn.Sequential(mlp([2 * C + 1, C]), nn.Linear(C, 1))
+        self.embed = nn.Sequential(mlp([C + 3, C]), nn.Linear(C, C))  # seed feature and position -> branch embedding
+        self.log_scale, self.margin = nn.Parameter(torch.tensor(float(np.log(4.0)))), nn.Parameter(torch.tensor(1.0))
+        if cfg.cosine: self.alpha, self.log_tau = nn.Parameter(torch.tensor(-10.0)), nn.Parameter(torch.tensor(float(np.log(0.1))))
 
     def affinity(self, seed_xyz, seed_feat):
-        "(B, S, S) affinity logits of the seeds."
-        d = torch.cdist(seed_xyz, seed_xyz)
+        "(B, S, S) affinity logits of the seeds: `scale * (margin - D)` with D the (scaled cosine) distance of their embeddings."
+        e = self.embed(torch.cat([seed_feat, seed_xyz], -1))
+        sq = (e * e).sum(-1)
+        d = (sq[:, :, None] + sq[:, None] - 2 * e @ e.transpose(1, 2)).clamp_min(1e-8).sqrt()  # the Euclidean term
         if self.cfg.cosine:
-            f = F.normalize(self.proj(seed_feat), dim=-1)
-            cos = (f @ f.transpose(1, 2)).abs()
-            return self.a * cos - self.log_s.exp() * d + self.b
-        S = seed_feat.shape[1]
-        pair = torch.cat([seed_feat[:, :, None].expand(-1, -1, S, -1), seed_feat[:, None].expand(-1, S, -1, -1), d[..., None]], -1)
-        l = self.pair(pair)[..., 0]
-        return (l + l.transpose(1, 2)) / 2
+            n = F.normalize(e, dim=-1)
+            sm = torch.softmax((n @ n.transpose(1, 2)) / self.log_tau.exp(), -1)
+            d = d + self.alpha * (sm + sm.transpose(1, 2)) / 2            # alpha (learned from -10) times a softmax of cosines
+        return self.log_scale.exp() * (self.margin - d)
 
     def forward(self, xyz, seed: int | None = None) -> dict:
         "Logits for points `xyz` (B, N, 3) in the unit sphere."
@@ -129,7 +135,8 @@ class TreePartNet(nn.Module):
         k = min(self.cfg.k_seeds, sx.shape[1])
         knn = torch.cdist(xyz, sx).topk(k, dim=-1, largest=False).indices  # (B, N, k), nearest first
         fine = self.fine(pf[:, :, None] - gather(sf, knn))[..., 0]
-        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=self.junction(pf)[..., 0], fine=fine, affinity=self.affinity(sx, sf))
+        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=self.junction(pf)[..., 0], fine=fine, affinity=self.affinity(sx, sf),
+                    pairs=neighbour_pairs(sx, self.cfg.pair_neighbours))
 
 # %% ../nbs/09a_partnet.ipynb #b467cf8e
 def partnet_targets(out: dict, part: torch.Tensor) -> dict:
@@ -155,7 +162,7 @@ def partnet_loss(out: dict, part: torch.Tensor, junction: torch.Tensor, cfg: Par
     t = partnet_targets(out, part)
     lj = F.binary_cross_entropy_with_logits(out["junction"], junction)
     lf = F.cross_entropy(out["fine"].reshape(-1, out["fine"].shape[-1]), t["fine"].reshape(-1), ignore_index=-100) if (t["fine"] >= 0).any() else out["fine"].sum() * 0
-    m = t["mask"]
+    m = t["mask"] & out["pairs"]
     if cfg.focal: la = focal_loss(out["affinity"][m], t["affinity"][m], cfg.omega, cfg.gamma).mean() * 10  # the focal term is small; x10 keeps the three terms comparable
     else: la = F.binary_cross_entropy_with_logits(out["affinity"][m], t["affinity"][m])
     return lj + lf + la, dict(junction=lj.item(), fine=lf.item(), affinity=la.item())
@@ -188,7 +195,8 @@ def segment(model: TreePartNet, points, seed: int = 0, threshold: float = 0.5, n
     torch.manual_seed(seed)
     out = model(torch.from_numpy(q[pick])[None], seed=seed)
     fine = out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy()  # seed index of each sample
-    seed_branch = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy(), threshold, out["seed_xyz"][0].numpy(), neighbours)
+    nb = (model.cfg.pair_neighbours or None) if neighbours is None else neighbours  # by default the pairs the network was trained on
+    seed_branch = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy(), threshold, out["seed_xyz"][0].numpy(), nb)
     _, near = cKDTree(q[pick]).query(q)
     branch = seed_branch[fine][near]
     _, inv, cnt = np.unique(branch, return_inverse=True, return_counts=True)
@@ -197,7 +205,7 @@ def segment(model: TreePartNet, points, seed: int = 0, threshold: float = 0.5, n
                 seed_xyz=out["seed_xyz"][0].numpy() * s + c, seed_branch=seed_branch)
 
 # %% ../nbs/09a_partnet.ipynb #401dc9ad
-PARTNET_FORMAT = 1
+PARTNET_FORMAT = 2  # 2: the affinity head embeds the seeds (version 1 scored their distance in space)
 WEIGHTS = Path(__file__).parent / "data" / "weights" / "partnet.pt" if "__file__" in globals() else Path("../treebook/data/weights/partnet.pt")
 
 def save_partnet(model: TreePartNet, path, **meta) -> Path:
@@ -239,6 +247,19 @@ def cluster_scores(pred, true) -> dict:
     p, t = np.asarray(pred), np.asarray(true)
     ok = t >= 0
     return dict(ri=float(rand_score(t[ok], p[ok])), nmi=float(normalized_mutual_info_score(t[ok], p[ok])), clusters=int(len(np.unique(p[ok]))))
+
+def affinity_scores(affinity_prob, true_seed_part, threshold: float = 0.5, pairs=None) -> dict:
+    "Precision, recall, F1 of the seed pairs whose affinity is above `threshold`, before any closure (paper Table 1); only `pairs` (bool matrix) if given."
+    a, t = np.asarray(affinity_prob), np.asarray(true_seed_part)
+    if a.ndim != 2 or a.shape != (len(t), len(t)): raise TreebookError(f"affinity must be ({len(t)}, {len(t)}), got {a.shape}")
+    scored = np.ones(a.shape, bool) if pairs is None else np.asarray(pairs, bool)
+    ok = t >= 0; a, t, scored = a[ok][:, ok], t[ok], scored[ok][:, ok]
+    iu = np.triu_indices(len(t), 1)
+    pp, tt, sc = (a > threshold)[iu], (t[:, None] == t[None])[iu], scored[iu]
+    pp, tt = pp[sc], tt[sc]
+    tp = float((pp & tt).sum())
+    prec = tp / max(pp.sum(), 1); rec = tp / max(tt.sum(), 1)
+    return dict(precision=prec, recall=rec, f1=2 * prec * rec / max(prec + rec, 1e-12))
 
 # %% ../nbs/09a_partnet.ipynb #b0e0ad3d
 def som_clusters(points, n_clusters: int, iterations: int = 20_000, sigma: float = 1.0, learning_rate: float = 0.5, seed: int = 0) -> np.ndarray:
