@@ -232,13 +232,8 @@ def load_partnet(path=None) -> TreePartNet:
 # %% ../nbs/09a_partnet.ipynb #a6ce118e
 def merge_scores(pred_seed_branch, true_seed_part) -> dict:
     "Precision, recall, F1 of the seed pairs put in one branch, against the true parts (outlier seeds, part -1, ignored)."
-    p, t = np.asarray(pred_seed_branch), np.asarray(true_seed_part)
-    ok = t >= 0; p, t = p[ok], t[ok]
-    iu = np.triu_indices(len(p), 1)
-    pp, tt = (p[:, None] == p[None])[iu], (t[:, None] == t[None])[iu]
-    tp = float((pp & tt).sum())
-    prec = tp / max(pp.sum(), 1); rec = tp / max(tt.sum(), 1)
-    return dict(precision=prec, recall=rec, f1=2 * prec * rec / max(prec + rec, 1e-12))
+    p = np.asarray(pred_seed_branch)
+    return affinity_scores((p[:, None] == p[None]).astype(float), true_seed_part)  # "one branch" is an affinity of 1
 
 def cluster_scores(pred, true) -> dict:
     "Rand index and NMI of labels `pred` against `true` (points with true label -1 ignored); needs scikit-learn."
