@@ -123,7 +123,8 @@ def clustering(weights, n_scans, rows=CLUSTER_ROWS):
             pairs = out["pairs"][0].numpy()
             prob = torch.sigmoid(out["affinity"][0]).numpy() * pairs
             sp = part[out["seed_idx"][0].numpy()]
-            merge.append(merge_scores(merge_seeds(prob), sp) | {f"affinity_{k}": v for k, v in affinity_scores(prob, sp, pairs=pairs).items()})
+            th = model.cfg.threshold  # the threshold segment merges at
+            merge.append(merge_scores(merge_seeds(prob, th), sp) | {f"affinity_{k}": v for k, v in affinity_scores(prob, sp, th, pairs=pairs).items()})
         if "mean_shift" in rows:
             res["mean_shift"].append(cluster_scores(MeanShift(bandwidth=estimate_bandwidth(q, quantile=0.02, random_state=0), bin_seeding=True).fit_predict(q), part))
         if "spectral" in rows:

@@ -31,6 +31,7 @@ p.add_argument("--batch", type=int, default=8); p.add_argument("--lr", type=floa
 p.add_argument("--threads", type=int, default=1); p.add_argument("--time-limit", type=float, default=None)
 p.add_argument("--n-eval", type=int, default=50); p.add_argument("--baseline", default=None, help="unconditional model for the points baseline")
 p.add_argument("--seed", type=int, default=0); p.add_argument("--eval-only", action="store_true"); p.add_argument("--ship", action="store_true")
+p.add_argument("--no-broadcast", action="store_true", help="the prompt alone, without the summary added to every token (models before it)")
 a = p.parse_args()
 torch.set_num_threads(a.threads)
 out = root / a.out if not Path(a.out).is_absolute() else Path(a.out)
@@ -47,14 +48,16 @@ else:
     dec = TreeTransformer(ModelConfig(arch="full", dim=a.dim, depth=a.depth, heads=a.heads, max_len=max_len))
 tok.save(out / "tokenizer.json")
 torch.manual_seed(a.seed + 1)
-model = ConditionalTree(a.kind, dec, heads=dec.config.heads)
-meta = {"kind": a.kind, "order": a.order, "init": a.init, "trees": len(train), "batch": a.batch, "lr": a.lr, "seed": a.seed}
+model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=not a.no_broadcast)
+meta = {"kind": a.kind, "order": a.order, "init": a.init, "broadcast": not a.no_broadcast, "trees": len(train), "batch": a.batch, "lr": a.lr, "seed": a.seed}
 if a.init and Path(a.init).suffix == ".pt": meta["init_meta"] = {k: v for k, v in torch.load(a.init, weights_only=True).get("meta", {}).items() if k in ("step", "val_loss")}
 if not a.eval_only:
     r = fit(model, lambda k: cond_batch(a.kind, train, tok, k, a.batch, a.seed, a.order), lambda m, b: m.loss(b), out,
             steps=a.steps, lr=a.lr, warmup=a.warmup, ckpt_every=5, log_every=5, time_limit=a.time_limit, meta=meta)
     print(json.dumps(r), flush=True)
 ck = torch.load(out / "last.pt", weights_only=True)
+if model.broadcast and "summary.weight" not in ck["model"]:  # a run from before the broadcast summary
+    model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=False); meta["broadcast"] = False
 model.load_state_dict(ck["model"]); model.eval()
 res = {"command": "python scripts/train_conditions.py " + " ".join(sys.argv[1:]),
        "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
@@ -116,8 +119,8 @@ if a.ship:
     card = f"""# elm-{a.kind}: {a.kind} to tree
 
 - **Data**: the first {len(train)} training trees of the `elm` dataset (`data/elm`), turned about z and mirrored, then {'photographed by `scan.silhouette` (front camera, 224 px, read at 112 px)' if a.kind == 'image' else 'sketched by `scan.sketch` (2D segments)' if a.kind == 'sketch' else 'sampled (200 points of the branch surfaces)'}; sequences in {a.order.upper()} order.
-- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix), hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; decoder {'started from `' + str(a.init) + '`' if a.init else 'trained from scratch'}.
-- **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on one thread of a shared 2-core CPU.
+- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; decoder {'started from `' + str(a.init) + '`' if a.init else 'trained from scratch'}.
+- **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on {a.threads} thread{'s' if a.threads > 1 else ''} of a 2-core CPU.
 - **Command**: `{res.get('train_command', res['command'])}`{'; evaluated and shipped by `' + res['command'] + '`' if 'train_command' in res else ''}; commit {res['commit']}.
 - **Metrics** on {a.n_eval} held-out trees (`results/{name}.json`): held-out loss {res['held_out_loss']:.3f}; {ev}.
 - **Limits**: a tiny, briefly trained model; the numbers are far from the paper's and are stored to be beaten.

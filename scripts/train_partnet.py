@@ -67,28 +67,39 @@ def batch(pool, idx, n, seed, aug=True):
 
 
 @torch.no_grad()
-def evaluate(model, pool, n, seed=12345):
-    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over the test pool (no augmentation but the fixed subset)."
+def seed_outputs(model, pool, n, seed=12345):
+    "Per scan of `pool` (no augmentation, a fixed subset): affinity probabilities on the scored pairs, the pairs, seed parts, fine clusters, labels."
     model.eval()
-    rows = []
     for k, raw in enumerate(pool):
         q, part, junc = batch(pool, [k], n, seed + k, aug=False)
         out = model(q, seed=seed)
-        fine = out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy()
         pairs = out["pairs"][0].numpy()
-        prob = torch.sigmoid(out["affinity"][0]).numpy() * pairs  # pairs the network does not score are "not one branch"
-        sb = merge_seeds(prob)
-        sp = part[0][out["seed_idx"][0]].numpy()
-        af = affinity_scores(prob, sp, pairs=pairs)  # the network's own decisions
-        cs = cluster_scores(sb[fine], part[0].numpy())
-        fs = cluster_scores(fine, part[0].numpy())
-        ms = merge_scores(sb, sp)
-        jacc = float(((out["junction"][0] > 0).float() == junc[0]).float().mean())
+        yield dict(prob=torch.sigmoid(out["affinity"][0]).numpy() * pairs,  # pairs the network does not score are "not one branch"
+                   pairs=pairs, seed_part=part[0][out["seed_idx"][0]].numpy(), part=part[0].numpy(),
+                   fine=out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy(),
+                   junction_acc=float(((out["junction"][0] > 0).float() == junc[0]).float().mean()))
+    model.train()
+
+
+def evaluate(model, pool, n, seed=12345, threshold=None):
+    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over the test pool, merging at `threshold` (default: the model's)."
+    th = model.cfg.threshold if threshold is None else threshold
+    rows = []
+    for o in seed_outputs(model, pool, n, seed):
+        sb, sp = merge_seeds(o["prob"], th), o["seed_part"]
+        af = affinity_scores(o["prob"], sp, th, pairs=o["pairs"])  # the network's own decisions
+        cs, fs, ms = cluster_scores(sb[o["fine"]], o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
         rows.append(dict(ri=cs["ri"], nmi=cs["nmi"], clusters=cs["clusters"], true_parts=int(len(np.unique(sp[sp >= 0]))),
                          fine_ri=fs["ri"], fine_nmi=fs["nmi"], precision=ms["precision"], recall=ms["recall"], f1=ms["f1"],
-                         aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], junction_acc=jacc))
-    model.train()
+                         aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], junction_acc=o["junction_acc"]))
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+
+
+def fit_threshold(model, pool, n, grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
+    "The merging threshold with the best mean merged F1 on `pool` (training scans), and that F1 for every threshold tried."
+    outs = list(seed_outputs(model, pool, n, seed=777))
+    f1 = {float(t): float(np.mean([merge_scores(merge_seeds(o["prob"], t), o["seed_part"])["f1"] for o in outs])) for t in grid}
+    return max(f1, key=f1.get), f1
 
 
 def main():
@@ -109,10 +120,13 @@ def main():
     ap.add_argument("--width", type=int, default=PartNetConfig.width, help="channels of the PointNet++ backbone")
     ap.add_argument("--results", default=None, help="where to write the training record (default results/partnet_train*.json)")
     ap.add_argument("--points", type=int, default=PartNetConfig.n_points, help="points per training scan")
+    ap.add_argument("--init", default=None, help="start from these weights (same sizes); layers they lack start fresh")
+    ap.add_argument("--no-pair-term", action="store_true", help="the affinity without the learned pair term (as in the paper)")
+    ap.add_argument("--fit-scans", type=int, default=60, help="training scans on which to choose the merging threshold (0: keep 0.5)")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
-    cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points)
+    cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term)
     train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=2 * cfg.n_points, desc="train scans")
     test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=2 * cfg.n_points, desc="test scans")
     torch.manual_seed(a.seed)
@@ -122,10 +136,18 @@ def main():
     step, elapsed, log = 0, 0.0, []
     if ck.exists():
         blob = torch.load(ck, weights_only=False)
-        if blob["config"] != cfg.to_dict(): sys.exit(f"{ck} was made with another config; use another --work")
+        if PartNetConfig.from_dict(blob["config"]) != cfg: sys.exit(f"{ck} was made with another config; use another --work")
         model.load_state_dict(blob["model"]); opt.load_state_dict(blob["opt"])
         step, elapsed, log = blob["step"], blob["elapsed"], blob["log"]
         print(f"resumed at step {step} ({elapsed / 60:.1f} min)")
+    elif a.init:
+        src = torch.load(a.init, map_location="cpu", weights_only=False)
+        mine = {k: v for k, v in src["config"].items() if k not in ("pair_term", "threshold")}
+        if any(mine[k] != v for k, v in cfg.to_dict().items() if k in mine and k not in ("pair_term", "threshold")):
+            sys.exit(f"{a.init} has another config ({mine}); --init needs the same sizes")
+        missing, unexpected = model.load_state_dict(src["state"], strict=False)
+        if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
+        print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
     rng = np.random.default_rng([a.seed, step])
     t0 = time.time() - elapsed
     bar = tqdm(total=a.steps, initial=step, desc="train")
@@ -148,12 +170,18 @@ def main():
         blob = dict(model=model.state_dict(), opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log, config=cfg.to_dict())
         _atomic_write(ck, lambda f: torch.save(blob, f))
     minutes = (time.time() - t0) / 60
+    fit = {}
+    if a.fit_scans > 0:  # choose the merging threshold on training scans, never on the held-out ones
+        cfg.threshold, fit = fit_threshold(model, train[:a.fit_scans], cfg.n_points)
+        print(f"merging threshold {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[cfg.threshold]:.3f})")
     metrics = evaluate(model, test, cfg.n_points)
+    at_half = evaluate(model, test, cfg.n_points, threshold=0.5) if cfg.threshold != 0.5 else metrics
     print(json.dumps(metrics, indent=1))
     try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
     except OSError: commit = "?"
     command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
     meta = dict(steps=step, batch=a.batch, minutes=round(minutes, 1), train_scans=len(train), test_scans=len(test), metrics=metrics,
+                threshold=cfg.threshold, threshold_fit=fit, metrics_at_half=at_half, init=a.init,
                 command=command, commit=commit, machine=f"{platform.machine()}, {a.threads} threads", torch=str(torch.__version__))
     out = Path(a.out)
     save_partnet(model, out, **meta)
@@ -165,7 +193,7 @@ def main():
 
 - **Model**: `treebook.partnet.TreePartNet` with `PartNetConfig` {json.dumps(cfg.to_dict())}; {sum(p.numel() for p in model.parameters()):,} parameters, {out.stat().st_size / 1e6:.1f} MB.
 - **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {2 * cfg.n_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes a random {cfg.n_points}-point subset, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.
-- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']} (CPU, shared).
+- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']} (CPU, shared){f", starting from {a.init}" if a.init else ""}. Merging threshold {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}{f" (held-out merged F1 at 0.5: {at_half['f1']:.3f})" if fit else ""}.
 - **Command**: `{command}` (commit {commit}).
 - **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs after the closure) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
 - **Limits**: trained for {minutes:.0f} minutes on a CPU, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.

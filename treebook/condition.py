@@ -173,23 +173,35 @@ def _batch_cond(kind, items):
 
 class ConditionalTree(nn.Module):
     "Encoder + 50-query prompt + hourglass decoder: a tree conditioned on an image, a sketch or points."
-    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4):
+    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4, broadcast: bool = True):
         super().__init__()
         if kind not in KINDS: raise TreebookError(f"unknown condition {kind!r}: use one of {', '.join(KINDS)}")
         dim = decoder.config.dim
-        self.kind, self.n_queries, self.heads = kind, n_queries, heads
+        self.kind, self.n_queries, self.heads, self.broadcast = kind, n_queries, heads, broadcast
         self.encoder = ImageEncoder(dim) if kind == "image" else SetEncoder(4 if kind == "sketch" else 3, dim, heads)
         self.prompt = QueryPrompt(dim, n_queries, heads)
+        if broadcast:  # the pooled features, added to every token's embedding; zero at first, so a trained decoder starts unchanged
+            self.summary = nn.Linear(dim, dim)
+            nn.init.zeros_(self.summary.weight); nn.init.zeros_(self.summary.bias)
         self.decoder = decoder
 
-    def prefix(self, x, mask=None): "(B, 56, dim) condition vectors."; return self.prompt(self.encoder(x, mask), mask)
+    def condition(self, x, mask=None) -> tuple:
+        "(prefix (B, 56, dim), bias (B, dim) or None): the query prompt and the broadcast summary of the input."
+        f = self.encoder(x, mask)
+        bias = None
+        if self.broadcast:
+            w = torch.ones(f.shape[:2]) if mask is None else (~mask).float()
+            bias = self.summary((f * w[..., None]).sum(1) / w.sum(1, keepdim=True).clamp_min(1))
+        return self.prompt(f, mask), bias
+
+    def prefix(self, x, mask=None): "(B, 56, dim) condition vectors."; return self.condition(x, mask)[0]
 
     def loss(self, batch) -> torch.Tensor:
         "Cross-entropy of the tree tokens given the condition; `batch` = (x, mask, seqs (B, L))."
         x, mask, seqs = batch
         P = self.prompt.length
         full = torch.cat([torch.full((seqs.shape[0], P), COND, dtype=torch.long), torch.as_tensor(seqs)], 1)
-        with condition_prefix(self.decoder, self.prefix(x, mask)): logits = self.decoder(full[:, :-1])
+        with condition_prefix(self.decoder, *self.condition(x, mask)): logits = self.decoder(full[:, :-1])
         target = full[:, 1:].masked_fill(full[:, 1:] >= COND, PAD)
         return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
 
@@ -221,7 +233,7 @@ def save_conditional(model: ConditionalTree, tok: Tokenizer, path, **meta) -> Pa
     "Write a conditional model to `path` (.pt) and its tokenizer to `path` with .tok.json, atomically."
     path = Path(path)
     ck = {"format": "treebook.conditional", "version": COND_VERSION, "kind": model.kind, "n_queries": model.n_queries,
-          "heads": model.heads, "config": asdict(model.decoder.config),
+          "heads": model.heads, "broadcast": model.broadcast, "config": asdict(model.decoder.config),
           "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}, "meta": meta}
     tok.save(path.with_suffix(".tok.json"))
     return _atomic_write(path, lambda f: torch.save(ck, f))
@@ -244,7 +256,7 @@ def load_conditional(model="elm-image"):
     if ck.get("version") != COND_VERSION: raise TreebookError(f"{p} has version {ck.get('version')}; this treebook reads {COND_VERSION}")
     tp = p.with_suffix(".tok.json")
     if not tp.is_file(): raise TreebookError(f"no tokenizer beside {p}: expected {tp.name}")
-    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"])
+    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"], ck.get("broadcast", False))
     m.load_state_dict(ck["state_dict"])
     return m.eval(), Tokenizer.load(tp)
 
@@ -255,7 +267,8 @@ def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: floa
     net, tok = load_conditional(model)
     net.eval()
     x, mask = _batch_cond(net.kind, [cond])
-    seqs = generate(net.decoder, n, tok=tok, prefix=net.prefix(x, mask), temperature=temperature, top_p=top_p, top_k=top_k,
+    prefix, bias = net.condition(x, mask)
+    seqs = generate(net.decoder, n, tok=tok, prefix=prefix, bias=bias, temperature=temperature, top_p=top_p, top_k=top_k,
                     seed=seed, progress=progress)
     return [tok.decode(s) for s in seqs]
 

@@ -175,14 +175,15 @@ class StagedGrammar(TreeGrammar):
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #018dd5bd
 @contextmanager
-def condition_prefix(model: TreeTransformer, prefix=None):
-    "Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8)."
-    if prefix is None: yield model; return
-    P = prefix.shape[1]
+def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
+    "Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8), and `bias` (B, dim) to those of every position."
+    if prefix is None and bias is None: yield model; return
+    P = 0 if prefix is None else prefix.shape[1]
     if P % BLOCK: raise TreebookError(f"a condition prefix must be a whole number of branch blocks (a multiple of 8), got {P}")
     base = type(model).embed
     def embed(idx, start: int = 0):
         x = base(model, idx, start)
+        if bias is not None: x = x + bias[:, None]  # one vector for the whole sequence (broadcast over a batch of samples)
         k = min(P - start, idx.shape[1])
         if k <= 0: return x
         pre = prefix[:, start:start + k].expand(x.shape[0], -1, -1)
@@ -192,10 +193,10 @@ def condition_prefix(model: TreeTransformer, prefix=None):
     finally: del model.embed
 
 @torch.no_grad()
-def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, stages: int = 1,
+def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, bias=None, stages: int = 1,
              mode: str = "incremental", min_new: int = 0, max_len: int | None = None, temperature: float = 1.0, top_k: int | None = None,
              top_p: float | None = None, structure: bool = True, fair_stops: bool = True, seed: int = 0, progress: bool = False) -> list:
-    "`n` token sequences (without the condition positions) continuing `prompt` (default: 8 [SOS]) after a condition `prefix`."
+    "`n` token sequences (without the condition positions) continuing `prompt` (default: 8 [SOS]) after a condition `prefix` (and with a condition `bias` on every position)."
     c = model.config
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
     if temperature < 0: raise TreebookError(f"temperature must be >= 0, got {temperature}")
@@ -225,7 +226,7 @@ def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None,
         for t in range(P0, P): grammar.observe(full[:, t], t)
     min_len = P + BLOCK * int(min_new)
     ending, done, length = np.zeros(n, bool), np.zeros(n, bool), np.full(n, max_len)
-    with condition_prefix(model, prefix):
+    with condition_prefix(model, prefix, bias):
         state = DecodeState(model, n, max_len)
         logits = model.extend(seqs[:, :P], state)[:, -1]
         for t in tqdm(range(P, max_len), disable=not progress, desc="sampling", leave=False):

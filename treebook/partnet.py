@@ -91,18 +91,26 @@ class PartNetConfig:
     gamma: float = 2.0
     cosine: bool = True
     focal: bool = True
+    pair_term: bool = True
+    threshold: float = 0.5
     def to_dict(self) -> dict: return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
     @classmethod
     def from_dict(cls, d: dict) -> "PartNetConfig":
         names = set(cls.__dataclass_fields__)
+        d = {"pair_term": False, **d}  # weights saved before the pair term existed have none
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items() if k in names})
+
+def _nearest_seeds(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
+    "(B, S, k') indices of the `k` nearest other seeds of each seed (all others if `k` is 0 or covers them all)."
+    S = seed_xyz.shape[1]
+    k = S - 1 if k <= 0 or k >= S - 1 else k
+    return torch.cdist(seed_xyz, seed_xyz).topk(k + 1, dim=-1, largest=False).indices[:, :, 1:]
 
 def neighbour_pairs(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
     "(B, S, S) bool: seed pairs where one is among the `k` nearest seeds of the other (all pairs if `k` is 0 or covers them all)."
     B, S, _ = seed_xyz.shape
     if k <= 0 or k >= S - 1: return torch.ones(B, S, S, dtype=torch.bool, device=seed_xyz.device)
-    nb = torch.cdist(seed_xyz, seed_xyz).topk(k + 1, dim=-1, largest=False).indices
-    near = torch.zeros(B, S, S, dtype=torch.bool, device=seed_xyz.device).scatter_(2, nb, True)
+    near = torch.eye(S, dtype=torch.bool, device=seed_xyz.device).expand(B, S, S).clone().scatter_(2, _nearest_seeds(seed_xyz, k), True)
     return near | near.transpose(1, 2)
 
 class TreePartNet(nn.Module):
@@ -117,9 +125,22 @@ class TreePartNet(nn.Module):
         self.embed = nn.Sequential(mlp([C + 3, C]), nn.Linear(C, C))  # seed feature and position -> branch embedding
         self.log_scale, self.margin = nn.Parameter(torch.tensor(float(np.log(4.0)))), nn.Parameter(torch.tensor(1.0))
         if cfg.cosine: self.alpha, self.log_tau = nn.Parameter(torch.tensor(-10.0)), nn.Parameter(torch.tensor(float(np.log(0.1))))
+        if cfg.pair_term:  # a correction per neighbouring pair; starts at zero, so it can be added to trained weights
+            self.pair = nn.Sequential(mlp([2 * C + 3, C]), nn.Linear(C, 1))
+            nn.init.zeros_(self.pair[-1].weight); nn.init.zeros_(self.pair[-1].bias)
 
-    def affinity(self, seed_xyz, seed_feat):
-        "(B, S, S) affinity logits of the seeds: `scale * (margin - D)` with D the (scaled cosine) distance of their embeddings."
+    def pair_logits(self, e, seed_xyz, nb):
+        "(B, S, S) the pair term: an MLP of the two embeddings (symmetric) and their offset, on the pairs `nb` (B, S, k), 0 elsewhere."
+        ej = gather(e, nb); ei = e[:, :, None].expand_as(ej)
+        dx = gather(seed_xyz, nb) - seed_xyz[:, :, None]
+        geo = torch.stack([dx.norm(dim=-1), dx[..., 2].abs(), dx[..., :2].norm(dim=-1)], -1)  # distance, rise, run: turn-invariant
+        g = self.pair(torch.cat([ei + ej, (ei - ej).abs(), geo], -1))[..., 0]
+        B, S, _ = e.shape
+        G = e.new_zeros(B, S, S).scatter(2, nb, g); n = e.new_zeros(B, S, S).scatter(2, nb, torch.ones_like(g))
+        return (G + G.transpose(1, 2)) / (n + n.transpose(1, 2)).clamp_min(1)  # the mean of both directions
+
+    def affinity(self, seed_xyz, seed_feat, nb=None):
+        "(B, S, S) affinity logits of the seeds: `scale * (margin - D)` with D the (scaled cosine) distance of their embeddings, plus the pair term."
         e = self.embed(torch.cat([seed_feat, seed_xyz], -1))
         sq = (e * e).sum(-1)
         d = (sq[:, :, None] + sq[:, None] - 2 * e @ e.transpose(1, 2)).clamp_min(1e-8).sqrt()  # the Euclidean term
@@ -127,7 +148,9 @@ class TreePartNet(nn.Module):
             n = F.normalize(e, dim=-1)
             sm = torch.softmax((n @ n.transpose(1, 2)) / self.log_tau.exp(), -1)
             d = d + self.alpha * (sm + sm.transpose(1, 2)) / 2            # alpha (learned from -10) times a softmax of cosines
-        return self.log_scale.exp() * (self.margin - d)
+        logit = self.log_scale.exp() * (self.margin - d)
+        if self.cfg.pair_term: logit = logit + self.pair_logits(e, seed_xyz, _nearest_seeds(seed_xyz, self.cfg.pair_neighbours) if nb is None else nb)
+        return logit
 
     def forward(self, xyz, seed: int | None = None) -> dict:
         "Logits for points `xyz` (B, N, 3) in the unit sphere."
@@ -184,8 +207,8 @@ def merge_seeds(affinity_prob, threshold: float = 0.5, seed_xyz=None, neighbours
 
 # %% ../nbs/09a_partnet.ipynb #418991cf
 @torch.no_grad()
-def segment(model: TreePartNet, points, seed: int = 0, threshold: float = 0.5, neighbours: int | None = None) -> dict:
-    "Branch label (n,), junction flag (n,), fine cluster (n,) of every point of `points` (n, 3), and the seeds."
+def segment(model: TreePartNet, points, seed: int = 0, threshold: float | None = None, neighbours: int | None = None) -> dict:
+    "Branch label (n,), junction flag (n,), fine cluster (n,) of every point of `points` (n, 3), and the seeds; `threshold` defaults to the model's."
     p = np.asarray(points, np.float64)
     q, c, s = normalize_points(p)
     n = model.cfg.n_points
@@ -195,8 +218,10 @@ def segment(model: TreePartNet, points, seed: int = 0, threshold: float = 0.5, n
     torch.manual_seed(seed)
     out = model(torch.from_numpy(q[pick])[None], seed=seed)
     fine = out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy()  # seed index of each sample
-    nb = (model.cfg.pair_neighbours or None) if neighbours is None else neighbours  # by default the pairs the network was trained on
-    seed_branch = merge_seeds(torch.sigmoid(out["affinity"][0]).numpy(), threshold, out["seed_xyz"][0].numpy(), nb)
+    threshold = model.cfg.threshold if threshold is None else threshold
+    prob = torch.sigmoid(out["affinity"][0]).numpy()
+    if neighbours is None: seed_branch = merge_seeds(prob * out["pairs"][0].numpy(), threshold)  # the pairs the network was trained on
+    else: seed_branch = merge_seeds(prob, threshold, out["seed_xyz"][0].numpy(), neighbours)
     _, near = cKDTree(q[pick]).query(q)
     branch = seed_branch[fine][near]
     _, inv, cnt = np.unique(branch, return_inverse=True, return_counts=True)
