@@ -7,6 +7,7 @@ The pool of labelled scans (grown trees of all species, scanned with noise, outl
 and re-running the same command goes on where it stopped. Training stops at --steps or after --minutes of wall time.
 """
 import argparse, json, os, platform, subprocess, sys, time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -142,12 +143,14 @@ def main():
         print(f"resumed at step {step} ({elapsed / 60:.1f} min)")
     elif a.init:
         src = torch.load(a.init, map_location="cpu", weights_only=False)
-        mine = {k: v for k, v in src["config"].items() if k not in ("pair_term", "threshold")}
-        if any(mine[k] != v for k, v in cfg.to_dict().items() if k in mine and k not in ("pair_term", "threshold")):
-            sys.exit(f"{a.init} has another config ({mine}); --init needs the same sizes")
+        theirs = PartNetConfig.from_dict(src["config"])
+        if replace(theirs, pair_term=cfg.pair_term, threshold=cfg.threshold) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
         print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
+    def save_checkpoint():
+        blob = dict(model=model.state_dict(), opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log, config=cfg.to_dict())
+        _atomic_write(ck, lambda f: torch.save(blob, f))
     rng = np.random.default_rng([a.seed, step])
     t0 = time.time() - elapsed
     bar = tqdm(total=a.steps, initial=step, desc="train")
@@ -163,12 +166,9 @@ def main():
         if step % a.every == 0:
             log.append(dict(step=step, minutes=(time.time() - t0) / 60, **dict(zip(["loss", "junction", "fine", "affinity"], np.mean(run, 0).tolist()))))
             run = []
-            blob = dict(model=model.state_dict(), opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log, config=cfg.to_dict())
-            _atomic_write(ck, lambda f: torch.save(blob, f))
+            save_checkpoint()
     bar.close()
-    if not log or log[-1]["step"] != step:  # the last steps since a checkpoint: save them, so that a re-run evaluates these weights
-        blob = dict(model=model.state_dict(), opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log, config=cfg.to_dict())
-        _atomic_write(ck, lambda f: torch.save(blob, f))
+    if not log or log[-1]["step"] != step: save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
     minutes = (time.time() - t0) / 60
     fit = {}
     if a.fit_scans > 0:  # choose the merging threshold on training scans, never on the held-out ones

@@ -106,11 +106,12 @@ def _nearest_seeds(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
     k = S - 1 if k <= 0 or k >= S - 1 else k
     return torch.cdist(seed_xyz, seed_xyz).topk(k + 1, dim=-1, largest=False).indices[:, :, 1:]
 
-def neighbour_pairs(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
-    "(B, S, S) bool: seed pairs where one is among the `k` nearest seeds of the other (all pairs if `k` is 0 or covers them all)."
+def neighbour_pairs(seed_xyz: torch.Tensor, k: int, nb: torch.Tensor | None = None) -> torch.Tensor:
+    "(B, S, S) bool: seed pairs where one is among the `k` nearest seeds of the other (all pairs if `k` is 0 or covers them all); `nb`: those seeds, if known."
     B, S, _ = seed_xyz.shape
     if k <= 0 or k >= S - 1: return torch.ones(B, S, S, dtype=torch.bool, device=seed_xyz.device)
-    near = torch.eye(S, dtype=torch.bool, device=seed_xyz.device).expand(B, S, S).clone().scatter_(2, _nearest_seeds(seed_xyz, k), True)
+    nb = _nearest_seeds(seed_xyz, k) if nb is None else nb
+    near = torch.eye(S, dtype=torch.bool, device=seed_xyz.device).expand(B, S, S).clone().scatter_(2, nb, True)
     return near | near.transpose(1, 2)
 
 class TreePartNet(nn.Module):
@@ -158,8 +159,9 @@ class TreePartNet(nn.Module):
         k = min(self.cfg.k_seeds, sx.shape[1])
         knn = torch.cdist(xyz, sx).topk(k, dim=-1, largest=False).indices  # (B, N, k), nearest first
         fine = self.fine(pf[:, :, None] - gather(sf, knn))[..., 0]
-        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=self.junction(pf)[..., 0], fine=fine, affinity=self.affinity(sx, sf),
-                    pairs=neighbour_pairs(sx, self.cfg.pair_neighbours))
+        nb = _nearest_seeds(sx, self.cfg.pair_neighbours)  # once, for the pair term and the pairs scored
+        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=self.junction(pf)[..., 0], fine=fine, affinity=self.affinity(sx, sf, nb),
+                    pairs=neighbour_pairs(sx, self.cfg.pair_neighbours, nb))
 
 # %% ../nbs/09a_partnet.ipynb #b467cf8e
 def partnet_targets(out: dict, part: torch.Tensor) -> dict:
