@@ -2,8 +2,10 @@
 held-out silhouettes the conditional models are scored on (results/conditions.json). If a conditional model does not beat
 this row, its condition is not being used.
 
-Usage: python scripts/eval_unconditional_silhouettes.py --model elm [--n-eval 50] [--seed 0]
-Adds the row "unconditional/<name>" to results/conditions.json and writes results/conditions_unconditional.json.
+Usage: python scripts/eval_unconditional_silhouettes.py --model elm [--n-eval 50] [--seed 0] [--fit] [--candidates 4]
+Adds the row "unconditional/<name>[+fit][+bestK]" to results/conditions.json and writes results/conditions_unconditional[_fit][_bestK].json.
+With --fit each sample is fitted to the held-out silhouette (condition.fit_silhouette); with --candidates K the best of K
+samples by silhouette IoU is kept: the same steps `image_to_tree(fit=..., candidates=...)` takes after the image model.
 """
 import argparse, json, os, platform, subprocess, sys, time
 from pathlib import Path
@@ -12,20 +14,24 @@ from treebook.datasets import load_trees
 from treebook.scan import silhouette
 from treebook.train import load_pretrained
 from treebook.growth import generate
-from treebook.condition import silhouette_scores
+from treebook.condition import silhouette_scores, best_by_silhouette
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
 p.add_argument("--model", default="elm"); p.add_argument("--data", default="data/elm"); p.add_argument("--n-eval", type=int, default=50)
 p.add_argument("--seed", type=int, default=0); p.add_argument("--threads", type=int, default=1)
+p.add_argument("--fit", action="store_true"); p.add_argument("--candidates", type=int, default=1)
 a = p.parse_args()
+if a.candidates < 1: p.error("--candidates must be at least 1")
+variant = ("+fit" if a.fit else "") + (f"+best{a.candidates}" if a.candidates > 1 else "")
 torch.set_num_threads(a.threads)
 test = load_trees(root / a.data, "test")[:a.n_eval]
 net, tok = load_pretrained(a.model)
 rows = []
 for i, t in enumerate(test):   # the same seeds as evaluate_image: sample i uses seed + i
-    g = tok.decode(generate(net, 1, tok=tok, temperature=0.9, top_p=0.95, seed=a.seed + i)[0])
-    rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
+    gs = [tok.decode(s) for s in generate(net, a.candidates, tok=tok, temperature=0.9, top_p=0.95, seed=a.seed + i)]
+    if variant: rows.append(best_by_silhouette(gs, silhouette(t), fit=a.fit)[1])
+    else: rows.append(silhouette_scores(silhouette(gs[0]) if gs[0].n else np.zeros((224, 224)), silhouette(t)))
 ev = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 meta = torch.load(a.model, weights_only=True).get("meta", {}) if Path(a.model).suffix == ".pt" else {}
 res = {"command": "python scripts/eval_unconditional_silhouettes.py " + " ".join(sys.argv[1:]),
@@ -33,9 +39,10 @@ res = {"command": "python scripts/eval_unconditional_silhouettes.py " + " ".join
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "model": a.model, "model_step": meta.get("step"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
        "eval": ev}
-(root / "results" / "conditions_unconditional.json").write_text(json.dumps(res, indent=1))
+name = "conditions_unconditional" + variant.replace("+", "_")
+(root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
 table = json.loads(tp.read_text()) if tp.exists() else {"table": {}}
-table["table"][f"unconditional/{Path(a.model).stem}"] = {"step": meta.get("step"), **ev, "details": "results/conditions_unconditional.json"}
+table["table"][f"unconditional/{Path(a.model).stem}{variant}"] = {"step": meta.get("step"), **ev, "details": f"results/{name}.json"}
 tp.write_text(json.dumps(table, indent=1))
 print(json.dumps(res, indent=1))

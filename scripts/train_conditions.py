@@ -5,6 +5,8 @@ Usage (resumable: run the same command again after a kill):
     python scripts/train_conditions.py --kind image --order bfs --out runs/elm-image-bfs --steps 300      (BFS: from scratch, see below)
     python scripts/train_conditions.py --kind points --out runs/elm-points --init runs/elm/best.pt --steps 300 --baseline runs/elm/best.pt
     python scripts/train_conditions.py ... --eval-only   (evaluate the run as it stands)
+    python scripts/train_conditions.py --kind image ... --eval-only --fit --candidates 4   (the network, then fitted to the
+        silhouette and best of 4 by IoU: rows "image/dfs+fit+best4", results/conditions_image_dfs_fit_best4.json)
 
 Data: the training trees of data/elm, turned and mirrored, then photographed (`scan.silhouette`), sketched (`scan.sketch`) or
 sampled (200 surface points); held-out: the first --n-eval test trees. The decoder starts from --init (a DFS-trained
@@ -31,8 +33,13 @@ p.add_argument("--batch", type=int, default=8); p.add_argument("--lr", type=floa
 p.add_argument("--threads", type=int, default=1); p.add_argument("--time-limit", type=float, default=None)
 p.add_argument("--n-eval", type=int, default=50); p.add_argument("--baseline", default=None, help="unconditional model for the points baseline")
 p.add_argument("--seed", type=int, default=0); p.add_argument("--eval-only", action="store_true"); p.add_argument("--ship", action="store_true")
+p.add_argument("--fit", action="store_true", help="image: fit each generated tree to the input silhouette (condition.fit_silhouette)")
+p.add_argument("--candidates", type=int, default=1, help="image: keep the best of this many samples by silhouette IoU")
 p.add_argument("--no-broadcast", action="store_true", help="the prompt alone, without the summary added to every token (models before it)")
 a = p.parse_args()
+variant = ("+fit" if a.fit else "") + (f"+best{a.candidates}" if a.candidates > 1 else "")
+if variant and a.kind != "image": p.error("--fit and --candidates are for --kind image")
+if variant and a.ship: p.error("--ship stores the network's own scores: ship without --fit / --candidates")
 torch.set_num_threads(a.threads)
 out = root / a.out if not Path(a.out).is_absolute() else Path(a.out)
 out.mkdir(parents=True, exist_ok=True)
@@ -69,7 +76,7 @@ with torch.no_grad(): res["held_out_loss"] = float(np.mean([float(model.loss(con
                                                             for k in range(4)]))
 t0 = time.time()
 pair = (model, tok)
-if a.kind == "image": res["eval"] = evaluate_image(pair, test, seed=a.seed)
+if a.kind == "image": res["eval"] = evaluate_image(pair, test, seed=a.seed, fit=a.fit, candidates=a.candidates)
 elif a.kind == "points":
     base = load_pretrained(a.baseline) if a.baseline else None
     res["eval"] = evaluate_points(pair, test, baseline=base, seed=a.seed)
@@ -90,7 +97,7 @@ from treebook.metrics import sample_surface
 from treebook.condition import image_to_tree, sketch_to_tree, points_to_tree, points_input
 pics, labels = [], []
 for i, t in enumerate(test[:4]):
-    if a.kind == "image": inp, g = Image.fromarray(255 - silhouette(t)), image_to_tree(silhouette(t), 1, a.seed + i, pair)[0]
+    if a.kind == "image": inp, g = Image.fromarray(255 - silhouette(t)), image_to_tree(silhouette(t), 1, a.seed + i, pair, fit=a.fit, candidates=a.candidates)[0]
     elif a.kind == "sketch": inp, g = Image.fromarray(255 - sketch(t)[1]), sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair)[0]
     else:
         pts = sample_surface(t, 4 * 200, a.seed + i)
@@ -99,16 +106,17 @@ for i, t in enumerate(test[:4]):
         g = points_to_tree(pts, 1, a.seed + i, pair)[0]
     pics += [inp, Image.fromarray(255 - silhouette(g)) if g.n else Image.new("L", (224, 224), 255)]
     labels += [f"held-out {i}: input", f"generated ({g.n} branches)"]
-image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"conditions_{a.kind}_{a.order}.png")
 (root / "results").mkdir(exist_ok=True)
-name = f"conditions_{a.kind}_{a.order}"
-if a.eval_only and (root / "results" / f"{name}.json").exists():   # keep the command that trained the run
-    old = json.loads((root / "results" / f"{name}.json").read_text())
+base = f"conditions_{a.kind}_{a.order}"
+name = base + variant.replace("+", "_")
+if a.eval_only and (root / "results" / f"{base}.json").exists():   # keep the command that trained the run
+    old = json.loads((root / "results" / f"{base}.json").read_text())
     res["train_command"] = old.get("train_command", old.get("command"))
+image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"{name}.png")
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
 table = json.loads(tp.read_text()) if tp.exists() else {"table": {}}
-table["table"][f"{a.kind}/{a.order}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": f"results/{name}.json"}
+table["table"][f"{a.kind}/{a.order}{variant}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": f"results/{name}.json"}
 tp.write_text(json.dumps(table, indent=1))
 print(json.dumps(res, indent=1))
 if a.ship:

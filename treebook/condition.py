@@ -23,10 +23,10 @@ from .growth import condition_prefix, extend_context, fit, generate
 
 # %% auto #0
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
-           'ImageEncoder', 'image_input', 'sketch_input', 'points_input', 'read_lines', 'ConditionalTree',
-           'condition_of', 'cond_batch', 'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree',
-           'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points',
-           'demo_image_to_tree']
+           'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'points_input', 'read_lines',
+           'ConditionalTree', 'condition_of', 'cond_batch', 'save_conditional', 'load_conditional',
+           'sample_conditional', 'image_to_tree', 'sketch_to_tree', 'points_to_tree', 'silhouette_scores',
+           'evaluate_image', 'evaluate_points', 'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -77,8 +77,8 @@ class ImageEncoder(nn.Module):
         return f.flatten(2).transpose(1, 2) + self.pos
 
 # %% ../nbs/10a_condition.ipynb #d8e79ad7
-def image_input(image) -> np.ndarray:
-    "(112, 112) float32 in [0, 1], tree bright, from a (H, W[, C]) array, a PIL image or an image file."
+def _image_gray(image) -> np.ndarray:
+    "(H, W) float32 in [0, 1], tree bright, from a (H, W[, C]) array, a PIL image or an image file."
     from PIL import Image
     if isinstance(image, (str, Path)):
         p = Path(image)
@@ -90,11 +90,23 @@ def image_input(image) -> np.ndarray:
     if a.ndim == 3: a = a[..., :3].mean(-1) if a.shape[-1] >= 3 else a[..., 0]
     if a.ndim != 2 or min(a.shape) < 16: raise TreebookError(f"an image must be 2-D (or 2-D with colour channels), at least 16 pixels a side; got shape {a.shape}")
     a = a.astype(np.float32)
+    if not np.isfinite(a).all(): raise TreebookError("the image holds NaN or infinity")
     if a.max() > 1.0: a = a / 255.0
     if np.median(a) > 0.5: a = 1.0 - a           # dark tree on a light background
     if a.max() - a.min() < 1e-3: raise TreebookError("the image is blank: there is no tree to read")
-    im = Image.fromarray((np.clip(a, 0, 1) * 255).astype(np.uint8)).resize((IMAGE_INPUT, IMAGE_INPUT), Image.BILINEAR)
-    return np.asarray(im, np.float32) / 255.0
+    return np.clip(a, 0, 1)
+
+def _resized(a, size):
+    from PIL import Image
+    return np.asarray(Image.fromarray((a * 255).astype(np.uint8)).resize((size, size), Image.BILINEAR), np.float32) / 255.0
+
+def image_input(image) -> np.ndarray:
+    "(112, 112) float32 in [0, 1], tree bright, from a (H, W[, C]) array, a PIL image or an image file."
+    return _resized(_image_gray(image), IMAGE_INPUT)
+
+def silhouette_target(image, size: int = 224) -> np.ndarray:
+    "(size, size) bool mask (True = tree) of an image, in the frame of the front camera (`scan.silhouette`)."
+    return _resized(_image_gray(image), size) > 0.5
 
 def sketch_input(lines) -> np.ndarray:
     "(m, 4) float32 segments x0 z0 x1 z1 in the canonical frame from image-coordinate segments (y down); at most 256."
@@ -273,9 +285,15 @@ def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: floa
     return [tok.decode(s) for s in seqs]
 
 # %% ../nbs/10a_condition.ipynb #f499f10d
-def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", **kw) -> list:
-    "`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file)."
-    return sample_conditional(model, image_input(image), n, seed, **kw)
+def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool = False, candidates: int = 1, **kw) -> list:
+    """`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file). With `candidates` > 1 each
+    tree is the best of that many samples by silhouette IoU; with `fit` its branch ends are moved onto the silhouette
+    (`fit_silhouette`, below)."""
+    if not isinstance(candidates, (int, np.integer)) or candidates < 1: raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
+    trees = sample_conditional(model, image_input(image), n * candidates, seed, **kw)
+    if not fit and candidates == 1: return trees
+    target = silhouette_target(image)
+    return [best_by_silhouette(trees[k * candidates:(k + 1) * candidates], target, fit)[0] for k in range(n)]
 
 def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", **kw) -> list:
     "`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them."
@@ -295,12 +313,12 @@ def silhouette_scores(pred, target) -> dict:
     prec = tp / max(p.sum(), 1); rec = tp / max(t.sum(), 1)
     return {"iou": tp / max((p | t).sum(), 1), "precision": prec, "recall": rec, "f1": 2 * prec * rec / max(prec + rec, 1e-12)}
 
-def evaluate_image(model, trees, seed: int = 0, progress: bool = True, **kw) -> dict:
-    "Mean silhouette IoU / precision / recall / F1 of image-to-tree on held-out canonical `trees`."
+def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool = False, candidates: int = 1, **kw) -> dict:
+    "Mean silhouette IoU / precision / recall / F1 of image-to-tree on held-out canonical `trees` (`fit`, `candidates`: see `image_to_tree`)."
     from treebook.scan import silhouette
     rows = []
     for i, t in enumerate(tqdm(trees, desc="image to tree", disable=not progress)):
-        g = image_to_tree(silhouette(t), 1, seed + i, model, **kw)[0]
+        g = image_to_tree(silhouette(t), 1, seed + i, model, fit=fit, candidates=candidates, **kw)[0]
         rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 
@@ -319,6 +337,47 @@ def evaluate_points(model, trees, baseline=None, seed: int = 0, progress: bool =
             u = tok.decode(generate(net, 1, tok=tok, seed=seed + i, **kw)[0])
             out["unconditional"].append(chamfer(q, sample_surface(u, 2048, seed)))
     return {k: float(np.mean(v)) for k, v in out.items() if v} | {"n": len(trees)}
+
+# %% ../nbs/10a_condition.ipynb #78931f49
+def fit_silhouette(tree: Tree, target, max_px: float = 40) -> Tree:
+    """`tree` with each branch end the front camera sees outside the mask `target` (in the frame of `scan.silhouette`)
+    moved in x and z to the nearest pixel of the mask, if at most `max_px` pixels away; depth, radii and topology kept."""
+    from scipy import ndimage
+    from treebook.scan import WINDOW, _to_px
+    m = np.asarray(target) > 0
+    if m.ndim != 2 or m.shape[0] != m.shape[1]: raise TreebookError(f"the silhouette must be a square mask, got shape {m.shape}")
+    if not m.any(): raise TreebookError("the silhouette is empty: there is nothing to fit the tree to")
+    if not np.isfinite(max_px) or max_px < 0: raise TreebookError(f"max_px must be a number >= 0, got {max_px!r}")
+    if not tree.n: return tree
+    size = m.shape[0]
+    dist, (row, col) = ndimage.distance_transform_edt(~m, return_indices=True)
+    x0, x1, z0, z1 = WINDOW
+    def move(ends):
+        e = ends.astype(np.float64)
+        uv = _to_px(e[:, [0, 2]], size)
+        seen = ((uv >= 0) & (uv < size)).all(1)                 # ends outside the picture are not the image's to judge
+        c = np.clip(np.floor(uv).astype(int), 0, size - 1)
+        d = dist[c[:, 1], c[:, 0]]
+        go = seen & (d > 0) & (d <= max_px)
+        r, k = row[c[go, 1], c[go, 0]], col[c[go, 1], c[go, 0]]
+        e[go, 0] = x0 + (k + 0.5) / size * (x1 - x0); e[go, 2] = z1 - (r + 0.5) / size * (z1 - z0)
+        return e
+    return Tree(move(tree.start), move(tree.end), tree.parent, **tree.attrs)
+
+def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> tuple:
+    "(tree, scores): of `trees` (each fitted first if `fit`), the one whose silhouette has the highest IoU with the mask `target`."
+    from treebook.scan import silhouette
+    m = np.asarray(target) > 0
+    best = None
+    for t in trees:
+        if not t.n: continue
+        g = fit_silhouette(t, m, max_px) if fit else t
+        s = silhouette_scores(silhouette(g, m.shape[0]), m)
+        if best is None or s["iou"] > best[1]["iou"]: best = (g, s)
+    if best is None:                                             # every sample was empty
+        if not len(trees): raise TreebookError("no trees to choose from")
+        return trees[0], silhouette_scores(np.zeros_like(m), m)
+    return best
 
 # %% ../nbs/10a_condition.ipynb #60eedd5e
 def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image") -> list:
