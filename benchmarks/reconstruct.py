@@ -21,7 +21,7 @@ from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.mesh import tree_mesh
 from treebook.pointio import read_points
-from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, affinity_scores, branch_chains, normalize_points, merge_seeds,
+from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, affinity_scores, branch_chains, normalize_points, merge_seeds, predict_seeds,
                               som_clusters)
 from treebook.reconstruct import reconstruct, coverage, skeleton_distance
 
@@ -117,14 +117,11 @@ def clustering(weights, n_scans, rows=CLUSTER_ROWS):
             if "ours" in rows: res["ours"].append(cluster_scores(seg["branch"], part))
             if "ours_fine" in rows: res["ours_fine"].append(cluster_scores(seg["fine"], part))
         if "ours" in rows:  # merging scores on the seeds of this run
-            import torch
-            with torch.no_grad():
-                out = model(torch.from_numpy(q)[None], seed=0)
-            pairs = out["pairs"][0].numpy()
-            prob = torch.sigmoid(out["affinity"][0]).numpy() * pairs
-            sp = part[out["seed_idx"][0].numpy()]
-            th = model.cfg.threshold  # the threshold segment merges at
-            merge.append(merge_scores(merge_seeds(prob, th), sp) | {f"affinity_{k}": v for k, v in affinity_scores(prob, sp, th, pairs=pairs).items()})
+            o = predict_seeds(model, q, seed=0, tta=model.cfg.tta)
+            pairs, prob, sp = o["pairs"], o["prob"], part[o["seed_idx"]]
+            th = model.cfg.threshold  # the threshold and linkage segment merges with
+            merge.append(merge_scores(merge_seeds(prob, th, linkage=model.cfg.linkage, pairs=pairs), sp)
+                         | {f"affinity_{k}": v for k, v in affinity_scores(prob, sp, th, pairs=pairs).items()})
         if "mean_shift" in rows:
             res["mean_shift"].append(cluster_scores(MeanShift(bandwidth=estimate_bandwidth(q, quantile=0.02, random_state=0), bin_seeding=True).fit_predict(q), part))
         if "spectral" in rows:

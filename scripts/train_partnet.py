@@ -19,8 +19,8 @@ sys.path.insert(0, str(root))
 from treebook.tree import _atomic_write
 from treebook.botany import SPECIES, grow
 from treebook.scan import scan
-from treebook.partnet import (PartNetConfig, TreePartNet, affinity_scores, augment, branch_chains, cluster_scores, merge_scores, merge_seeds,
-                              normalize_points, partnet_loss, partnet_targets, save_partnet)
+from treebook.partnet import (LINKAGES, PartNetConfig, TreePartNet, affinity_scores, augment, branch_chains, cluster_scores, merge_scores,
+                              merge_seeds, normalize_points, partnet_loss, partnet_targets, predict_seeds, save_partnet)
 
 
 def make_pool(n_per_species: int, seed: int, n_points: int, desc: str):
@@ -67,27 +67,23 @@ def batch(pool, idx, n, seed, aug=True):
             torch.from_numpy(np.stack([e[2] for e in ex])))
 
 
-@torch.no_grad()
 def seed_outputs(model, pool, n, seed=12345):
     "Per scan of `pool` (no augmentation, a fixed subset): affinity probabilities on the scored pairs, the pairs, seed parts, fine clusters, labels."
-    model.eval()
     for k, raw in enumerate(pool):
         q, part, junc = batch(pool, [k], n, seed + k, aug=False)
-        out = model(q, seed=seed)
-        pairs = out["pairs"][0].numpy()
-        yield dict(prob=torch.sigmoid(out["affinity"][0]).numpy() * pairs,  # pairs the network does not score are "not one branch"
-                   pairs=pairs, seed_part=part[0][out["seed_idx"][0]].numpy(), part=part[0].numpy(),
-                   fine=out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy(),
-                   junction_acc=float(((out["junction"][0] > 0).float() == junc[0]).float().mean()))
+        o = predict_seeds(model, q[0].numpy(), seed=seed, tta=model.cfg.tta)  # pairs the network does not score are "not one branch"
+        yield dict(prob=o["prob"], pairs=o["pairs"], seed_part=part[0].numpy()[o["seed_idx"]], part=part[0].numpy(), fine=o["fine"],
+                   junction_acc=float(((o["junction"] > 0) == junc[0].numpy().astype(bool)).mean()))
     model.train()
 
 
-def evaluate(model, pool, n, seed=12345, threshold=None):
-    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over the test pool, merging at `threshold` (default: the model's)."
+def evaluate(model, pool, n, seed=12345, threshold=None, linkage=None):
+    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over the test pool, merging at `threshold` by `linkage` (default: the model's)."
     th = model.cfg.threshold if threshold is None else threshold
+    linkage = model.cfg.linkage if linkage is None else linkage
     rows = []
     for o in seed_outputs(model, pool, n, seed):
-        sb, sp = merge_seeds(o["prob"], th), o["seed_part"]
+        sb, sp = merge_seeds(o["prob"], th, linkage=linkage, pairs=o["pairs"]), o["seed_part"]
         af = affinity_scores(o["prob"], sp, th, pairs=o["pairs"])  # the network's own decisions
         cs, fs, ms = cluster_scores(sb[o["fine"]], o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
         rows.append(dict(ri=cs["ri"], nmi=cs["nmi"], clusters=cs["clusters"], true_parts=int(len(np.unique(sp[sp >= 0]))),
@@ -96,11 +92,13 @@ def evaluate(model, pool, n, seed=12345, threshold=None):
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
 
 
-def fit_threshold(model, pool, n, grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
-    "The merging threshold with the best mean merged F1 on `pool` (training scans), and that F1 for every threshold tried."
+def fit_threshold(model, pool, n, linkages=("closure",), grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
+    "(linkage, threshold) with the best mean merged F1 on `pool` (training scans), and that F1 for every pair tried ('linkage@threshold')."
     outs = list(seed_outputs(model, pool, n, seed=777))
-    f1 = {float(t): float(np.mean([merge_scores(merge_seeds(o["prob"], t), o["seed_part"])["f1"] for o in outs])) for t in grid}
-    return max(f1, key=f1.get), f1
+    f1 = {f"{l}@{t:.2f}": float(np.mean([merge_scores(merge_seeds(o["prob"], t, linkage=l, pairs=o["pairs"]), o["seed_part"])["f1"] for o in outs]))
+          for l in linkages for t in grid}
+    best = max(f1, key=f1.get)
+    return best.split("@")[0], float(best.split("@")[1]), f1
 
 
 def main():
@@ -124,6 +122,8 @@ def main():
     ap.add_argument("--init", default=None, help="start from these weights (same sizes); layers they lack start fresh")
     ap.add_argument("--no-pair-term", action="store_true", help="the affinity without the learned pair term (as in the paper)")
     ap.add_argument("--fit-scans", type=int, default=60, help="training scans on which to choose the merging threshold (0: keep 0.5)")
+    ap.add_argument("--linkage", default="auto", choices=("auto", *LINKAGES), help="how seeds merge; auto: the better on the --fit-scans (closure with --fit-scans 0)")
+    ap.add_argument("--tta", type=int, default=1, help="test-time passes over turned copies of each cloud, averaged (partnet.predict_seeds)")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
@@ -144,7 +144,7 @@ def main():
     elif a.init:
         src = torch.load(a.init, map_location="cpu", weights_only=False)
         theirs = PartNetConfig.from_dict(src["config"])
-        if replace(theirs, pair_term=cfg.pair_term, threshold=cfg.threshold) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
+        if replace(theirs, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
         print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
@@ -171,17 +171,22 @@ def main():
     if not log or log[-1]["step"] != step: save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
     minutes = (time.time() - t0) / 60
     fit = {}
-    if a.fit_scans > 0:  # choose the merging threshold on training scans, never on the held-out ones
-        cfg.threshold, fit = fit_threshold(model, train[:a.fit_scans], cfg.n_points)
-        print(f"merging threshold {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[cfg.threshold]:.3f})")
+    if a.tta < 1: sys.exit("--tta must be at least 1")
+    cfg.tta = model.cfg.tta = a.tta
+    cfg.linkage = "closure" if a.linkage == "auto" else a.linkage
+    if a.fit_scans > 0:  # choose the merging threshold (and linkage) on training scans, never on the held-out ones
+        cfg.linkage, cfg.threshold, fit = fit_threshold(model, train[:a.fit_scans], cfg.n_points, LINKAGES if a.linkage == "auto" else (a.linkage,))
+        print(f"merging: {cfg.linkage} at {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[f'{cfg.linkage}@{cfg.threshold:.2f}']:.3f})")
+    model.cfg.linkage, model.cfg.threshold = cfg.linkage, cfg.threshold
     metrics = evaluate(model, test, cfg.n_points)
-    at_half = evaluate(model, test, cfg.n_points, threshold=0.5) if cfg.threshold != 0.5 else metrics
+    at_half = evaluate(model, test, cfg.n_points, threshold=0.5, linkage="closure")  # the paper's merging
+    metrics["closure_f1"] = evaluate(model, test, cfg.n_points, linkage="closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
     print(json.dumps(metrics, indent=1))
     try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
     except OSError: commit = "?"
     command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
     meta = dict(steps=step, batch=a.batch, minutes=round(minutes, 1), train_scans=len(train), test_scans=len(test), metrics=metrics,
-                threshold=cfg.threshold, threshold_fit=fit, metrics_at_half=at_half, init=a.init,
+                threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, threshold_fit=fit, metrics_at_half=at_half, init=a.init,
                 command=command, commit=commit, machine=f"{platform.machine()}, {a.threads} threads", torch=str(torch.__version__))
     out = Path(a.out)
     save_partnet(model, out, **meta)
@@ -193,7 +198,7 @@ def main():
 
 - **Model**: `treebook.partnet.TreePartNet` with `PartNetConfig` {json.dumps(cfg.to_dict())}; {sum(p.numel() for p in model.parameters()):,} parameters, {out.stat().st_size / 1e6:.1f} MB.
 - **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {2 * cfg.n_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes a random {cfg.n_points}-point subset, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.
-- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']} (CPU, shared){f", starting from {a.init}" if a.init else ""}. Merging threshold {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}{f" (held-out merged F1 at 0.5: {at_half['f1']:.3f})" if fit else ""}.
+- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']} (CPU, shared){f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
 - **Command**: `{command}` (commit {commit}).
 - **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs after the closure) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
 - **Limits**: trained for {minutes:.0f} minutes on a CPU, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.

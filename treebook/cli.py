@@ -182,6 +182,7 @@ def _cmd_condition(kind):
     def run(args):
         from treebook import condition
         if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
+        if kind == "image" and args.candidates < 1: raise TreebookError(f"--candidates must be at least 1, got {args.candidates}")
         kw = dict(n=args.n, seed=args.seed, temperature=args.temperature, top_p=args.top_p)
         _sampling_threads()
         if kind == "sketch": trees = condition.sketch_to_tree(args.input, model=args.model or "elm-sketch", **kw)
@@ -192,7 +193,7 @@ def _cmd_condition(kind):
             if not p.is_file(): raise TreebookError(f"no such image file: {p}")
             try: img = Image.open(p)
             except (UnidentifiedImageError, OSError) as e: raise TreebookError(f"cannot read {p} as an image: {e}") from None
-            trees = condition.image_to_tree(img, model=args.model or "elm-image", **kw)
+            trees = condition.image_to_tree(img, model=args.model or "elm-image", fit=args.fit, candidates=args.candidates, **kw)
         for p in write_trees([t for t in trees if t.n], args.out, f"{kind}_to_tree", picture=args.render, seed=args.seed): print(f"wrote {p}")
         return 0
     return run
@@ -364,6 +365,10 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("input", help=what)
         s.add_argument("--n", type=int, default=1, help="number of trees (default: 1)")
         if kind == "points": s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
+        if kind == "image":
+            s.add_argument("--fit", action=argparse.BooleanOptionalAction, default=True,
+                           help="move branch ends that fall outside the silhouette onto it (default: on)")
+            s.add_argument("--candidates", type=int, default=4, help="sample this many trees per output and keep the one whose outline matches best (default: 4)")
         s.add_argument("--render", action="store_true", help="also write a PNG per tree")
         sampling_args(s, None)
         s.set_defaults(func=_cmd_condition(kind))

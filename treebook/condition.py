@@ -339,30 +339,50 @@ def evaluate_points(model, trees, baseline=None, seed: int = 0, progress: bool =
     return {k: float(np.mean(v)) for k, v in out.items() if v} | {"n": len(trees)}
 
 # %% ../nbs/10a_condition.ipynb #78931f49
-def fit_silhouette(tree: Tree, target, max_px: float = 40) -> Tree:
-    """`tree` with each branch end the front camera sees outside the mask `target` (in the frame of `scan.silhouette`)
-    moved in x and z to the nearest pixel of the mask, if at most `max_px` pixels away; depth, radii and topology kept."""
-    from scipy import ndimage
+def _pulls(P, dist, row, col, max_px):
+    "(m, 2) x/z moves that take each node of `P` (m, 3) seen outside the mask to its nearest mask pixel, if within `max_px`."
     from treebook.scan import WINDOW, _to_px
+    size = dist.shape[0]; x0, x1, z0, z1 = WINDOW
+    uv = _to_px(P[:, [0, 2]], size)
+    seen = ((uv >= 0) & (uv < size)).all(1)                      # nodes outside the picture are not the image's to judge
+    c = np.clip(np.floor(uv).astype(int), 0, size - 1)
+    go = seen & (dist[c[:, 1], c[:, 0]] > 0) & (dist[c[:, 1], c[:, 0]] <= max_px)
+    r, k = row[c[:, 1], c[:, 0]], col[c[:, 1], c[:, 0]]
+    to = np.column_stack([x0 + (k + 0.5) / size * (x1 - x0), z1 - (r + 0.5) / size * (z1 - z0)])
+    return np.where(go[:, None], to - P[:, [0, 2]], 0.0)
+
+def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_px: float = 4, max_px: float = 40) -> Tree:
+    """`tree` pulled in x and z onto the mask `target` (in the frame of `scan.silhouette`); depth, radii and topology kept.
+    Each of `steps` rounds pulls every node the camera sees outside the mask (and within `max_px` pixels of it) towards its
+    nearest mask pixel, smooths the pulls along the tree and moves the nodes `rate` of the way; a last step puts the nodes
+    within `snap_px` pixels of the mask onto it."""
+    from scipy import ndimage
     m = np.asarray(target) > 0
     if m.ndim != 2 or m.shape[0] != m.shape[1]: raise TreebookError(f"the silhouette must be a square mask, got shape {m.shape}")
     if not m.any(): raise TreebookError("the silhouette is empty: there is nothing to fit the tree to")
-    if not np.isfinite(max_px) or max_px < 0: raise TreebookError(f"max_px must be a number >= 0, got {max_px!r}")
+    for name, v in (("max_px", max_px), ("snap_px", snap_px), ("rate", rate)):
+        if not np.isfinite(v) or v < 0: raise TreebookError(f"{name} must be a number >= 0, got {v!r}")
     if not tree.n: return tree
-    size = m.shape[0]
     dist, (row, col) = ndimage.distance_transform_edt(~m, return_indices=True)
-    x0, x1, z0, z1 = WINDOW
-    def move(ends):
-        e = ends.astype(np.float64)
-        uv = _to_px(e[:, [0, 2]], size)
-        seen = ((uv >= 0) & (uv < size)).all(1)                 # ends outside the picture are not the image's to judge
-        c = np.clip(np.floor(uv).astype(int), 0, size - 1)
-        d = dist[c[:, 1], c[:, 0]]
-        go = seen & (d > 0) & (d <= max_px)
-        r, k = row[c[go, 1], c[go, 0]], col[c[go, 1], c[go, 0]]
-        e[go, 0] = x0 + (k + 0.5) / size * (x1 - x0); e[go, 2] = z1 - (r + 0.5) / size * (z1 - z0)
-        return e
-    return Tree(move(tree.start), move(tree.end), tree.parent, **tree.attrs)
+    # nodes: the end of each branch (node i), then the start of each root branch; a branch starts at its parent's end node
+    n, roots = tree.n, np.flatnonzero(tree.parent < 0)
+    first = np.where(tree.parent >= 0, tree.parent, 0); first[roots] = n + np.arange(len(roots))
+    P = np.vstack([tree.end[:, :3], tree.start[roots, :3]]).astype(np.float64)
+    up = np.concatenate([first, np.full(len(roots), -1)])         # each node's parent node (-1: a root's start)
+    has = up >= 0
+    w = 1.0 + 0.5 * has + 0.5 * np.bincount(up[has], minlength=len(P))
+    for _ in range(steps):
+        D = _pulls(P, dist, row, col, max_px)
+        for _ in range(2):                                       # a pull is shared with the node's parent and children
+            S = D.copy()
+            S[has] += 0.5 * D[up[has]]
+            np.add.at(S, up[has], 0.5 * D[has])
+            D = S / w[:, None]
+        P[:, [0, 2]] += rate * D
+    P[:, [0, 2]] += _pulls(P, dist, row, col, min(snap_px, max_px))
+    start, end = tree.start.astype(np.float64), tree.end.astype(np.float64)
+    start[:, :3], end[:, :3] = P[first], P[:n]
+    return Tree(start, end, tree.parent, **tree.attrs)
 
 def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> tuple:
     "(tree, scores): of `trees` (each fitted first if `fit`), the one whose silhouette has the highest IoU with the mask `target`."
@@ -380,8 +400,8 @@ def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> t
     return best
 
 # %% ../nbs/10a_condition.ipynb #60eedd5e
-def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image") -> list:
-    "Write image_to_tree.png (input silhouette | generated tree's silhouette) and the tree as .npz into `out_dir`."
+def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image", candidates: int = 4) -> list:
+    "Write image_to_tree.png (input | the network's tree | fitted, best of `candidates`) and the fitted tree as .npz into `out_dir`."
     from PIL import Image
     from treebook.botany import grow
     from treebook.scan import silhouette
@@ -389,9 +409,11 @@ def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image") -> list:
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
     t = grow("elm", seed=10 ** 6 + seed)[-1]          # far from the training seeds
     im = silhouette(t)
-    g = image_to_tree(im, 1, seed, model)[0]
-    pics = [Image.fromarray(255 - im), Image.fromarray(255 - (silhouette(g) if g.n else np.zeros_like(im)))]
-    s = silhouette_scores(silhouette(g) if g.n else np.zeros_like(im), im)
-    grid = image_grid(pics, labels=["input silhouette", f"generated, IoU {s['iou']:.2f}"])
+    raw = sample_conditional(model, image_input(im), candidates, seed)
+    g, s = best_by_silhouette(raw, im, fit=True)
+    s0 = silhouette_scores(silhouette(raw[0]) if raw[0].n else np.zeros_like(im), im)
+    pics = [Image.fromarray(255 - silhouette(x)) if x.n else Image.new("L", im.shape[::-1], 255) for x in (raw[0], g)]
+    grid = image_grid([Image.fromarray(255 - im)] + pics,
+                      labels=["input silhouette", f"network, IoU {s0['iou']:.2f}", f"fitted, best of {candidates}, IoU {s['iou']:.2f}"])
     paths = [g.save(out / "image_to_tree.npz")] if g.n else []
     return paths + [_atomic_write(out / "image_to_tree.png", lambda f: grid.save(f, format="png"))]

@@ -22,9 +22,10 @@ from .mesh import continuation
 from .pointnet2 import PointNet2, gather, mlp
 
 # %% auto #0
-__all__ = ['PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example', 'PartNetConfig',
-           'neighbour_pairs', 'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds', 'segment',
-           'save_partnet', 'load_partnet', 'merge_scores', 'cluster_scores', 'affinity_scores', 'som_clusters']
+__all__ = ['LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example',
+           'PartNetConfig', 'neighbour_pairs', 'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss',
+           'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores', 'cluster_scores',
+           'affinity_scores', 'som_clusters']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -93,6 +94,8 @@ class PartNetConfig:
     focal: bool = True
     pair_term: bool = True
     threshold: float = 0.5
+    linkage: str = "closure"   # how `segment` merges seeds: "closure" (the paper) or "average" (see merge_seeds)
+    tta: int = 1               # passes of `segment` over turned copies of the cloud, averaged (see predict_seeds)
     def to_dict(self) -> dict: return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
     @classmethod
     def from_dict(cls, d: dict) -> "PartNetConfig":
@@ -193,43 +196,99 @@ def partnet_loss(out: dict, part: torch.Tensor, junction: torch.Tensor, cfg: Par
     return lj + lf + la, dict(junction=lj.item(), fine=lf.item(), affinity=la.item())
 
 # %% ../nbs/09a_partnet.ipynb #fd23b011
-def merge_seeds(affinity_prob, threshold: float = 0.5, seed_xyz=None, neighbours: int | None = None) -> np.ndarray:
-    "Branch id of each seed: connected components of the pairs with affinity > `threshold` (only among `neighbours` nearest seeds if given)."
+LINKAGES = ("closure", "average")
+
+def _average_linkage(a, scored, threshold) -> np.ndarray:
+    "Group ids: join the two groups whose scored pairs have the highest mean affinity, while that mean is above `threshold`."
+    n = len(a)
+    S = np.where(scored, (a + a.T) / 2, 0.0).astype(np.float64)   # sum of affinities between groups (rows: group representatives)
+    N = scored.astype(np.float64)                                  # number of scored pairs between groups
+    np.fill_diagonal(S, 0); np.fill_diagonal(N, 0)
+    label = np.arange(n)
+    while True:
+        M = np.where(N > 0, S / np.maximum(N, 1), -np.inf)
+        i, j = np.unravel_index(np.argmax(M), M.shape)
+        if not M[i, j] > threshold: break
+        S[i] += S[j]; S[:, i] += S[:, j]; N[i] += N[j]; N[:, i] += N[:, j]   # group j joins group i
+        S[i, i] = N[i, i] = 0
+        S[j], S[:, j], N[j], N[:, j] = 0, 0, 0, 0
+        label[label == j] = i
+    return np.unique(label, return_inverse=True)[1]
+
+def merge_seeds(affinity_prob, threshold: float = 0.5, seed_xyz=None, neighbours: int | None = None,
+                linkage: str = "closure", pairs=None) -> np.ndarray:
+    """Branch id of each seed. "closure": connected components of the pairs with affinity > `threshold`; "average": average
+    linkage over the scored pairs. Only `pairs` (a bool matrix), or pairs among `neighbours` nearest seeds, count if given."""
     a = np.asarray(affinity_prob)
     if a.ndim != 2 or a.shape[0] != a.shape[1]: raise TreebookError(f"affinity must be a square matrix, got shape {a.shape}")
-    ok = a > threshold
+    if linkage not in LINKAGES: raise TreebookError(f"linkage must be one of {', '.join(LINKAGES)}, got {linkage!r}")
+    scored = ~np.eye(len(a), dtype=bool)
+    if pairs is not None:
+        pairs = np.asarray(pairs, bool)
+        if pairs.shape != a.shape: raise TreebookError(f"pairs must have the shape of the affinity {a.shape}, got {pairs.shape}")
+        scored &= pairs | pairs.T
     if neighbours is not None:
         x = np.asarray(seed_xyz, np.float64)
         _, nb = cKDTree(x).query(x, min(neighbours + 1, len(x)))
-        near = np.zeros_like(ok); near[np.repeat(np.arange(len(x)), nb.shape[1]), nb.ravel()] = True
-        ok &= near | near.T
+        near = np.zeros_like(scored); near[np.repeat(np.arange(len(x)), nb.shape[1]), nb.ravel()] = True
+        scored &= near | near.T
+    if linkage == "average": return _average_linkage(a, scored, threshold)
+    ok = (a > threshold) & scored
     i, j = np.nonzero(np.triu(ok, 1))
     g = coo_matrix((np.ones(len(i)), (i, j)), shape=a.shape)
     return connected_components(g, directed=False)[1]
 
 # %% ../nbs/09a_partnet.ipynb #418991cf
+def _turn(q, r: int, passes: int):
+    "Pass `r` of `passes`: `q` (B, N, 3) turned about z by r/passes of a full turn, mirrored in x on odd passes."
+    a = 2 * np.pi * r / passes
+    R = torch.tensor([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]], dtype=q.dtype)
+    if r % 2: R = R * torch.tensor([[-1.0], [1.0], [1.0]], dtype=q.dtype)
+    return q @ R.T
+
 @torch.no_grad()
-def segment(model: TreePartNet, points, seed: int = 0, threshold: float | None = None, neighbours: int | None = None) -> dict:
-    "Branch label (n,), junction flag (n,), fine cluster (n,) of every point of `points` (n, 3), and the seeds; `threshold` defaults to the model's."
+def predict_seeds(model: TreePartNet, q, seed: int = 0, tta: int = 1) -> dict:
+    """The network's outputs for one normalised cloud `q` (n, 3) as numpy: `seed_xyz`, `seed_idx`, `pairs` (scored),
+    `affinity` (all pairs), `prob` (the affinity on the scored pairs, 0 elsewhere), `fine` (the seed of each point), `junction` (logit per point),
+    `passes`. With `tta` > 1 the cloud is also seen turned about z (odd passes mirrored) and the outputs are averaged."""
+    if not isinstance(tta, (int, np.integer)) or tta < 1: raise TreebookError(f"tta must be a whole number >= 1, got {tta!r}")
+    x = torch.as_tensor(np.asarray(q, np.float32))[None]
+    model.eval()
+    first, prob, fine, junction, passes = None, 0, 0, 0, 0
+    for r in range(tta):
+        torch.manual_seed(seed)
+        out = model(_turn(x, r, tta) if r else x, seed=seed)
+        if first is None: first = out
+        elif not (torch.equal(out["seed_idx"], first["seed_idx"]) and torch.equal(out["knn"], first["knn"])): continue  # a tie broke differently
+        prob = prob + torch.sigmoid(out["affinity"][0]); fine = fine + out["fine"][0]; junction = junction + out["junction"][0]
+        passes += 1
+    pairs = first["pairs"][0]
+    knn = first["knn"][0]
+    return dict(seed_xyz=first["seed_xyz"][0].numpy(), seed_idx=first["seed_idx"][0].numpy(), pairs=pairs.numpy(),
+                affinity=(prob / passes).numpy(), prob=(prob / passes * pairs).numpy(), fine=knn.gather(-1, fine.argmax(-1, keepdim=True))[:, 0].numpy(),
+                junction=(junction / passes).numpy(), passes=passes)
+
+@torch.no_grad()
+def segment(model: TreePartNet, points, seed: int = 0, threshold: float | None = None, neighbours: int | None = None,
+            linkage: str | None = None, tta: int | None = None) -> dict:
+    """Branch label (n,), junction flag (n,), fine cluster (n,) of every point of `points` (n, 3), and the seeds;
+    `threshold`, `linkage` and `tta` default to the model's (`model.cfg`)."""
     p = np.asarray(points, np.float64)
     q, c, s = normalize_points(p)
     n = model.cfg.n_points
     rng = np.random.default_rng(seed)
     pick = rng.choice(len(q), n, replace=len(q) < n)
-    model.eval()
-    torch.manual_seed(seed)
-    out = model(torch.from_numpy(q[pick])[None], seed=seed)
-    fine = out["knn"][0].gather(-1, out["fine"][0].argmax(-1, keepdim=True))[:, 0].numpy()  # seed index of each sample
+    o = predict_seeds(model, q[pick], seed, model.cfg.tta if tta is None else tta)
     threshold = model.cfg.threshold if threshold is None else threshold
-    prob = torch.sigmoid(out["affinity"][0]).numpy()
-    if neighbours is None: seed_branch = merge_seeds(prob * out["pairs"][0].numpy(), threshold)  # the pairs the network was trained on
-    else: seed_branch = merge_seeds(prob, threshold, out["seed_xyz"][0].numpy(), neighbours)
+    linkage = model.cfg.linkage if linkage is None else linkage
+    if neighbours is None: seed_branch = merge_seeds(o["prob"], threshold, linkage=linkage, pairs=o["pairs"])  # the pairs the network was trained on
+    else: seed_branch = merge_seeds(o["affinity"], threshold, o["seed_xyz"], neighbours, linkage=linkage)
     _, near = cKDTree(q[pick]).query(q)
-    branch = seed_branch[fine][near]
+    branch = seed_branch[o["fine"]][near]
     _, inv, cnt = np.unique(branch, return_inverse=True, return_counts=True)
     rank = np.empty_like(cnt); rank[np.argsort(-cnt, kind="stable")] = np.arange(len(cnt))
-    return dict(branch=rank[inv.ravel()], junction=(out["junction"][0].numpy() > 0)[near], fine=fine[near],
-                seed_xyz=out["seed_xyz"][0].numpy() * s + c, seed_branch=seed_branch)
+    return dict(branch=rank[inv.ravel()], junction=(o["junction"] > 0)[near], fine=o["fine"][near],
+                seed_xyz=o["seed_xyz"] * s + c, seed_branch=seed_branch)
 
 # %% ../nbs/09a_partnet.ipynb #401dc9ad
 PARTNET_FORMAT = 2  # 2: the affinity head embeds the seeds (version 1 scored their distance in space)

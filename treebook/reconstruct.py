@@ -382,7 +382,7 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage: bool = 
     labels, seg = None, None
     if method == "partnet":
         from treebook.partnet import load_partnet, segment
-        seg = segment(load_partnet(weights), p, seed=seed)  # the paper's merging: closure of the confident pairs, at the model's threshold
+        seg = segment(load_partnet(weights), p, seed=seed)  # merged as the weights' config says: linkage, threshold, test-time turns
         labels = seg["branch"]
     tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True)
     last, joins = np.arange(tree.n), 0
