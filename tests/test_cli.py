@@ -134,3 +134,23 @@ def test_generate_every_species_from_the_command_line(treebook_cmd, tmp_path):
         assert len(trees) == n and all(2 <= t.n <= spec.max_branches for t in trees)
         files = sorted((tmp_path / name / "trees").glob("tree_*.npz"))
         assert len(files) == n and Tree.load(files[0]).n == trees[0].n
+
+
+def test_image2tree_fits_the_silhouette_by_default(treebook_cmd, tmp_path):
+    "The shipped elm-image model from a PNG: fitted and best of 2 by default flags, and the network's own tree with --no-fit."
+    from PIL import Image
+    from treebook.botany import grow
+    from treebook.scan import silhouette
+    from treebook.condition import silhouette_scores
+    im = silhouette(grow("elm", seed=123456, max_branches=120)[-1])
+    Image.fromarray(255 - im).save(tmp_path / "sil.png")          # dark tree on white, as a user would draw it
+    iou = {}
+    for tag, flags in (("fit", ["--candidates", "2"]), ("raw", ["--no-fit", "--candidates", "1"])):
+        r = run(treebook_cmd, "image2tree", tmp_path / "sil.png", "--seed", "1", "--out", tmp_path / tag, *flags)
+        assert r.returncode == 0, r.stderr
+        files = sorted((tmp_path / tag).glob("*.npz"))
+        assert len(files) == 1, r.stdout
+        iou[tag] = silhouette_scores(silhouette(Tree.load(files[0])), im)["iou"]
+    assert iou["fit"] > iou["raw"], iou
+    r = run(treebook_cmd, "image2tree", tmp_path / "sil.png", "--candidates", "0", "--out", tmp_path / "x")
+    assert r.returncode == 2 and "--candidates must be at least 1" in r.stderr
