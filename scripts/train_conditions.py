@@ -33,12 +33,12 @@ p.add_argument("--batch", type=int, default=8); p.add_argument("--lr", type=floa
 p.add_argument("--threads", type=int, default=1); p.add_argument("--time-limit", type=float, default=None)
 p.add_argument("--n-eval", type=int, default=50); p.add_argument("--baseline", default=None, help="unconditional model for the points baseline")
 p.add_argument("--seed", type=int, default=0); p.add_argument("--eval-only", action="store_true"); p.add_argument("--ship", action="store_true")
-p.add_argument("--fit", action="store_true", help="image: fit each generated tree to the input silhouette (condition.fit_silhouette)")
-p.add_argument("--candidates", type=int, default=1, help="image: keep the best of this many samples by silhouette IoU")
+p.add_argument("--fit", action="store_true", help="image / sketch: fit each generated tree to the input silhouette / strokes (condition.fit_silhouette)")
+p.add_argument("--candidates", type=int, default=1, help="image / sketch: keep the best of this many samples by IoU with the input")
 p.add_argument("--no-broadcast", action="store_true", help="the prompt alone, without the summary added to every token (models before it)")
 a = p.parse_args()
 variant = ("+fit" if a.fit else "") + (f"+best{a.candidates}" if a.candidates > 1 else "")
-if variant and a.kind != "image": p.error("--fit and --candidates are for --kind image")
+if variant and a.kind == "points": p.error("--fit and --candidates are for --kind image or sketch")
 if variant and a.ship: p.error("--ship stores the network's own scores: ship without --fit / --candidates")
 torch.set_num_threads(a.threads)
 out = root / a.out if not Path(a.out).is_absolute() else Path(a.out)
@@ -85,7 +85,7 @@ else:
     from treebook.condition import sketch_to_tree, silhouette_scores
     rows = []
     for i, t in enumerate(test):
-        g = sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair)[0]
+        g = sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair, fit=a.fit, candidates=a.candidates)[0]
         rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
     res["eval"] = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 res["seconds_eval"] = time.time() - t0
@@ -98,7 +98,7 @@ from treebook.condition import image_to_tree, sketch_to_tree, points_to_tree, po
 pics, labels = [], []
 for i, t in enumerate(test[:4]):
     if a.kind == "image": inp, g = Image.fromarray(255 - silhouette(t)), image_to_tree(silhouette(t), 1, a.seed + i, pair, fit=a.fit, candidates=a.candidates)[0]
-    elif a.kind == "sketch": inp, g = Image.fromarray(255 - sketch(t)[1]), sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair)[0]
+    elif a.kind == "sketch": inp, g = Image.fromarray(255 - sketch(t)[1]), sketch_to_tree(sketch(t)[0], 1, a.seed + i, pair, fit=a.fit, candidates=a.candidates)[0]
     else:
         pts = sample_surface(t, 4 * 200, a.seed + i)
         inp = Image.new("L", (224, 224), 255); dr = ImageDraw.Draw(inp)

@@ -182,10 +182,10 @@ def _cmd_condition(kind):
     def run(args):
         from treebook import condition
         if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
-        if kind == "image" and args.candidates < 1: raise TreebookError(f"--candidates must be at least 1, got {args.candidates}")
+        if kind != "points" and args.candidates < 1: raise TreebookError(f"--candidates must be at least 1, got {args.candidates}")
         kw = dict(n=args.n, seed=args.seed, temperature=args.temperature, top_p=args.top_p)
         _sampling_threads()
-        if kind == "sketch": trees = condition.sketch_to_tree(args.input, model=args.model or "elm-sketch", **kw)
+        if kind == "sketch": trees = condition.sketch_to_tree(args.input, model=args.model or "elm-sketch", fit=args.fit, candidates=args.candidates, **kw)
         elif kind == "points": trees = condition.points_to_tree(args.input, model=args.model or "elm-points", up=args.up, **kw)
         else:
             from PIL import Image, UnidentifiedImageError
@@ -365,9 +365,9 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("input", help=what)
         s.add_argument("--n", type=int, default=1, help="number of trees (default: 1)")
         if kind == "points": s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
-        if kind == "image":
+        if kind != "points":
             s.add_argument("--fit", action=argparse.BooleanOptionalAction, default=True,
-                           help="move branch ends that fall outside the silhouette onto it (default: on)")
+                           help=f"pull the tree onto the {'silhouette' if kind == 'image' else 'strokes'} (default: on)")
             s.add_argument("--candidates", type=int, default=4, help="sample this many trees per output and keep the one whose outline matches best (default: 4)")
         s.add_argument("--render", action="store_true", help="also write a PNG per tree")
         sampling_args(s, None)

@@ -25,8 +25,9 @@ from .growth import condition_prefix, extend_context, fit, generate
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
            'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'points_input', 'read_lines',
            'ConditionalTree', 'condition_of', 'cond_batch', 'save_conditional', 'load_conditional',
-           'sample_conditional', 'image_to_tree', 'sketch_to_tree', 'points_to_tree', 'silhouette_scores',
-           'evaluate_image', 'evaluate_points', 'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
+           'sample_conditional', 'image_to_tree', 'sketch_target', 'sketch_to_tree', 'points_to_tree',
+           'silhouette_scores', 'evaluate_image', 'evaluate_points', 'fit_silhouette', 'best_by_silhouette',
+           'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -289,15 +290,34 @@ def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool
     """`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file). With `candidates` > 1 each
     tree is the best of that many samples by silhouette IoU; with `fit` its branch ends are moved onto the silhouette
     (`fit_silhouette`, below)."""
-    if not isinstance(candidates, (int, np.integer)) or candidates < 1: raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
+    _check_candidates(candidates)
     trees = sample_conditional(model, image_input(image), n * candidates, seed, **kw)
-    if not fit and candidates == 1: return trees
-    target = silhouette_target(image)
-    return [best_by_silhouette(trees[k * candidates:(k + 1) * candidates], target, fit)[0] for k in range(n)]
+    return _choose(trees, n, candidates, fit, lambda: silhouette_target(image))
 
-def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", **kw) -> list:
-    "`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them."
-    return sample_conditional(model, sketch_input(read_lines(lines)), n, seed, **kw)
+def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
+    "(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by the front camera."
+    from PIL import Image, ImageDraw
+    from treebook.scan import _to_px
+    s = np.asarray(segments, np.float64)
+    img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
+    for a, b in zip(_to_px(s[:, :2], size), _to_px(s[:, 2:], size)): draw.line([tuple(a), tuple(b)], fill=255, width=width)
+    return np.asarray(img) > 0
+
+def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", fit: bool = False, candidates: int = 1, **kw) -> list:
+    """`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them.
+    `fit` and `candidates` as for `image_to_tree`, with the strokes (`sketch_target`) as the outline to match."""
+    _check_candidates(candidates)
+    q = sketch_input(read_lines(lines))
+    return _choose(sample_conditional(model, q, n * candidates, seed, **kw), n, candidates, fit, lambda: sketch_target(q))
+
+def _check_candidates(candidates):
+    if not isinstance(candidates, (int, np.integer)) or candidates < 1: raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
+
+def _choose(trees, n, candidates, fit, target):
+    "Of each run of `candidates` trees the best by outline (fitted first if `fit`); `target()` makes the mask."
+    if not fit and candidates == 1: return trees
+    m = target()
+    return [best_by_silhouette(trees[k * candidates:(k + 1) * candidates], m, fit)[0] for k in range(n)]
 
 def points_to_tree(points, n: int = 1, seed: int = 0, model="elm-points", up: str = "z", **kw) -> list:
     "`n` trees for a point cloud (array or scan file; `up` 'z' or 'y'), in the cloud's own frame and units (z up)."
