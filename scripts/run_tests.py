@@ -18,7 +18,7 @@ def run_notebooks(flags):
     proc = subprocess.run(cmd, cwd=root, capture_output=True, text=True)
     sys.stdout.write(proc.stdout)
     sys.stderr.write(proc.stderr)
-    started = re.findall(r"^Starting (.+\.ipynb)$", proc.stdout, flags=re.M)
+    started = re.findall(r"Starting (\S+?\.ipynb)", proc.stdout)  # not anchored: two workers can print on one line
     failed = []
     if "Failed On The Following Notebooks" in proc.stderr:
         tail = proc.stderr.split("Failed On The Following Notebooks", 1)[1]
