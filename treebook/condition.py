@@ -411,7 +411,7 @@ def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> t
     best = None
     for t in trees:
         if not t.n: continue
-        g = fit_silhouette(t, m, max_px) if fit else t
+        g = fit_silhouette(t, m, max_px=max_px) if fit else t
         s = silhouette_scores(silhouette(g, m.shape[0]), m)
         if best is None or s["iou"] > best[1]["iou"]: best = (g, s)
     if best is None:                                             # every sample was empty
