@@ -14,7 +14,7 @@ from treebook.datasets import load_trees
 from treebook.scan import silhouette
 from treebook.train import load_pretrained
 from treebook.growth import generate
-from treebook.condition import silhouette_scores, best_by_silhouette
+from treebook.condition import best_by_silhouette
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
@@ -30,8 +30,7 @@ net, tok = load_pretrained(a.model)
 rows = []
 for i, t in enumerate(test):   # the same seeds as evaluate_image: sample i uses seed + i
     gs = [tok.decode(s) for s in generate(net, a.candidates, tok=tok, temperature=0.9, top_p=0.95, seed=a.seed + i)]
-    if variant: rows.append(best_by_silhouette(gs, silhouette(t), fit=a.fit)[1])
-    else: rows.append(silhouette_scores(silhouette(gs[0]) if gs[0].n else np.zeros((224, 224)), silhouette(t)))
+    rows.append(best_by_silhouette(gs, silhouette(t), fit=a.fit)[1])  # one candidate, no fit: that sample's own scores
 ev = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 meta = torch.load(a.model, weights_only=True).get("meta", {}) if Path(a.model).suffix == ".pt" else {}
 res = {"command": "python scripts/eval_unconditional_silhouettes.py " + " ".join(sys.argv[1:]),

@@ -67,22 +67,22 @@ def batch(pool, idx, n, seed, aug=True):
             torch.from_numpy(np.stack([e[2] for e in ex])))
 
 
-def seed_outputs(model, pool, n, seed=12345):
+def seed_outputs(model, pool, n, seed=12345) -> list:
     "Per scan of `pool` (no augmentation, a fixed subset): affinity probabilities on the scored pairs, the pairs, seed parts, fine clusters, labels."
+    outs = []
     for k, raw in enumerate(pool):
         q, part, junc = batch(pool, [k], n, seed + k, aug=False)
         o = predict_seeds(model, q[0].numpy(), seed=seed, tta=model.cfg.tta)  # pairs the network does not score are "not one branch"
-        yield dict(prob=o["prob"], pairs=o["pairs"], seed_part=part[0].numpy()[o["seed_idx"]], part=part[0].numpy(), fine=o["fine"],
-                   junction_acc=float(((o["junction"] > 0) == junc[0].numpy().astype(bool)).mean()))
+        outs.append(dict(prob=o["prob"], pairs=o["pairs"], seed_part=part[0].numpy()[o["seed_idx"]], part=part[0].numpy(), fine=o["fine"],
+                         junction_acc=float(((o["junction"] > 0) == junc[0].numpy().astype(bool)).mean())))
     model.train()
+    return outs
 
 
-def evaluate(model, pool, n, seed=12345, threshold=None, linkage=None):
-    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over the test pool, merging at `threshold` by `linkage` (default: the model's)."
-    th = model.cfg.threshold if threshold is None else threshold
-    linkage = model.cfg.linkage if linkage is None else linkage
-    rows = []
-    for o in seed_outputs(model, pool, n, seed):
+def evaluate(outs, threshold, linkage):
+    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over `seed_outputs`, merging at `threshold` by `linkage`."
+    th, rows = threshold, []
+    for o in outs:
         sb, sp = merge_seeds(o["prob"], th, linkage=linkage, pairs=o["pairs"]), o["seed_part"]
         af = affinity_scores(o["prob"], sp, th, pairs=o["pairs"])  # the network's own decisions
         cs, fs, ms = cluster_scores(sb[o["fine"]], o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
@@ -94,11 +94,11 @@ def evaluate(model, pool, n, seed=12345, threshold=None, linkage=None):
 
 def fit_threshold(model, pool, n, linkages=("closure",), grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
     "(linkage, threshold) with the best mean merged F1 on `pool` (training scans), and that F1 for every pair tried ('linkage@threshold')."
-    outs = list(seed_outputs(model, pool, n, seed=777))
-    f1 = {f"{l}@{t:.2f}": float(np.mean([merge_scores(merge_seeds(o["prob"], t, linkage=l, pairs=o["pairs"]), o["seed_part"])["f1"] for o in outs]))
+    outs = seed_outputs(model, pool, n, seed=777)
+    f1 = {(l, float(t)): float(np.mean([merge_scores(merge_seeds(o["prob"], t, linkage=l, pairs=o["pairs"]), o["seed_part"])["f1"] for o in outs]))
           for l in linkages for t in grid}
-    best = max(f1, key=f1.get)
-    return best.split("@")[0], float(best.split("@")[1]), f1
+    linkage, threshold = max(f1, key=f1.get)
+    return linkage, threshold, {f"{l}@{t:.2f}": v for (l, t), v in f1.items()}
 
 
 def main():
@@ -125,6 +125,7 @@ def main():
     ap.add_argument("--linkage", default="auto", choices=("auto", *LINKAGES), help="how seeds merge; auto: the better on the --fit-scans (closure with --fit-scans 0)")
     ap.add_argument("--tta", type=int, default=1, help="test-time passes over turned copies of each cloud, averaged (partnet.predict_seeds)")
     a = ap.parse_args()
+    if a.tta < 1: ap.error("--tta must be at least 1")
     torch.set_num_threads(a.threads)
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term)
@@ -171,16 +172,15 @@ def main():
     if not log or log[-1]["step"] != step: save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
     minutes = (time.time() - t0) / 60
     fit = {}
-    if a.tta < 1: sys.exit("--tta must be at least 1")
-    cfg.tta = model.cfg.tta = a.tta
+    cfg.tta = a.tta  # cfg is model.cfg: what is set here is what the network is evaluated and saved with
     cfg.linkage = "closure" if a.linkage == "auto" else a.linkage
     if a.fit_scans > 0:  # choose the merging threshold (and linkage) on training scans, never on the held-out ones
         cfg.linkage, cfg.threshold, fit = fit_threshold(model, train[:a.fit_scans], cfg.n_points, LINKAGES if a.linkage == "auto" else (a.linkage,))
         print(f"merging: {cfg.linkage} at {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[f'{cfg.linkage}@{cfg.threshold:.2f}']:.3f})")
-    model.cfg.linkage, model.cfg.threshold = cfg.linkage, cfg.threshold
-    metrics = evaluate(model, test, cfg.n_points)
-    at_half = evaluate(model, test, cfg.n_points, threshold=0.5, linkage="closure")  # the paper's merging
-    metrics["closure_f1"] = evaluate(model, test, cfg.n_points, linkage="closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
+    outs = seed_outputs(model, test, cfg.n_points)  # the network runs once; the three mergings below reuse its outputs
+    metrics = evaluate(outs, cfg.threshold, cfg.linkage)
+    at_half = evaluate(outs, 0.5, "closure")  # the paper's merging
+    metrics["closure_f1"] = evaluate(outs, cfg.threshold, "closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
     print(json.dumps(metrics, indent=1))
     try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
     except OSError: commit = "?"
