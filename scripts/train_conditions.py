@@ -4,6 +4,8 @@ Usage (resumable: run the same command again after a kill):
     python scripts/train_conditions.py --kind image --order dfs --out runs/elm-image-dfs --init runs/elm/best.pt --steps 300 [--ship]
     python scripts/train_conditions.py --kind image --order bfs --out runs/elm-image-bfs --steps 300      (BFS: from scratch, see below)
     python scripts/train_conditions.py --kind points --out runs/elm-points --init runs/elm/best.pt --steps 300 --baseline runs/elm/best.pt
+    python scripts/train_conditions.py --kind image --out runs/elm-image-glimpse --from elm-image --glimpse --steps 2000 --lr 5e-4 --ship
+        (start from a conditional model, add the glimpse: condition.Glimpse)
     python scripts/train_conditions.py ... --eval-only   (evaluate the run as it stands)
     python scripts/train_conditions.py --kind image ... --eval-only --fit --candidates 4   (the network, then fitted to the
         silhouette and best of 4 by IoU: rows "image/dfs+fit+best4", results/conditions_image_dfs_fit_best4.json)
@@ -21,7 +23,7 @@ from treebook.tokens import Tokenizer
 from treebook.hourglass import ModelConfig, TreeTransformer
 from treebook.train import WEIGHTS, load_pretrained
 from treebook.growth import extend_context, fit
-from treebook.condition import (ConditionalTree, cond_batch, save_conditional, evaluate_image, evaluate_points, N_QUERIES)
+from treebook.condition import (ConditionalTree, cond_batch, save_conditional, load_conditional, evaluate_image, evaluate_points, N_QUERIES)
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
@@ -36,6 +38,8 @@ p.add_argument("--seed", type=int, default=0); p.add_argument("--eval-only", act
 p.add_argument("--fit", action="store_true", help="image / sketch: fit each generated tree to the input silhouette / strokes (condition.fit_silhouette)")
 p.add_argument("--candidates", type=int, default=1, help="image / sketch: keep the best of this many samples by IoU with the input")
 p.add_argument("--no-broadcast", action="store_true", help="the prompt alone, without the summary added to every token (models before it)")
+p.add_argument("--from", dest="from_", default=None, help="start from this conditional model (shipped name or .pt); its decoder replaces --init")
+p.add_argument("--glimpse", action="store_true", help="image: add the glimpse, the image features where the tree is being drawn")
 a = p.parse_args()
 variant = ("+fit" if a.fit else "") + (f"+best{a.candidates}" if a.candidates > 1 else "")
 if variant and a.kind == "points": p.error("--fit and --candidates are for --kind image or sketch")
@@ -46,7 +50,12 @@ out.mkdir(parents=True, exist_ok=True)
 train, test = load_trees(root / a.data, "train")[:a.trees], load_trees(root / a.data, "test")[:a.n_eval]
 P = -(-N_QUERIES // 8) * 8
 max_len = P + max(t.n for t in train + test) * 8 + 16
-if a.init:
+if a.glimpse and a.kind != "image": p.error("--glimpse is for --kind image")
+if a.from_:
+    src_model, tok = load_conditional(a.from_)
+    if src_model.kind != a.kind: p.error(f"--from {a.from_} is a {src_model.kind} model, not {a.kind}")
+    dec = extend_context(src_model.decoder, max_len)
+elif a.init:
     dec, tok = load_pretrained(a.init)
     dec = extend_context(dec, max_len)
 else:
@@ -55,9 +64,14 @@ else:
     dec = TreeTransformer(ModelConfig(arch="full", dim=a.dim, depth=a.depth, heads=a.heads, max_len=max_len))
 tok.save(out / "tokenizer.json")
 torch.manual_seed(a.seed + 1)
-model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=not a.no_broadcast)
-meta = {"kind": a.kind, "order": a.order, "init": a.init, "broadcast": not a.no_broadcast, "trees": len(train), "batch": a.batch, "lr": a.lr, "seed": a.seed}
-if a.init and Path(a.init).suffix == ".pt": meta["init_meta"] = {k: v for k, v in torch.load(a.init, weights_only=True).get("meta", {}).items() if k in ("step", "val_loss")}
+model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=not a.no_broadcast, glimpse=a.glimpse, tok=tok)
+if a.from_:   # the source's encoder, prompt and summary; a glimpse it lacks starts at zero
+    missing, unexpected = model.load_state_dict({k: v for k, v in src_model.state_dict().items() if not k.startswith("decoder.")}, strict=False)
+    if unexpected or any(not (k.startswith("decoder.") or k.startswith("glimpse.")) for k in missing):
+        p.error(f"--from {a.from_} does not fit this model (missing {[k for k in missing if not k.startswith('decoder.')]}, unexpected {unexpected})")
+meta = {"kind": a.kind, "order": a.order, "init": a.from_ or a.init, "broadcast": not a.no_broadcast, "glimpse": a.glimpse, "trees": len(train),
+        "batch": a.batch, "lr": a.lr, "seed": a.seed}
+if a.init and not a.from_ and Path(a.init).suffix == ".pt": meta["init_meta"] = {k: v for k, v in torch.load(a.init, weights_only=True).get("meta", {}).items() if k in ("step", "val_loss")}
 if not a.eval_only:
     r = fit(model, lambda k: cond_batch(a.kind, train, tok, k, a.batch, a.seed, a.order), lambda m, b: m.loss(b), out,
             steps=a.steps, lr=a.lr, warmup=a.warmup, ckpt_every=5, log_every=5, time_limit=a.time_limit, meta=meta)
@@ -107,16 +121,17 @@ for i, t in enumerate(test[:4]):
     pics += [inp, Image.fromarray(255 - silhouette(g)) if g.n else Image.new("L", (224, 224), 255)]
     labels += [f"held-out {i}: input", f"generated ({g.n} branches)"]
 (root / "results").mkdir(exist_ok=True)
-base = f"conditions_{a.kind}_{a.order}"
+base = f"conditions_{a.kind}_{a.order}" + ("_glimpse" if a.glimpse else "")
 name = base + variant.replace("+", "_")
 if a.eval_only and (root / "results" / f"{base}.json").exists():   # keep the command that trained the run
     old = json.loads((root / "results" / f"{base}.json").read_text())
     res["train_command"] = old.get("train_command", old.get("command"))
+    res["train_commit"] = old.get("train_commit", old.get("commit"))
 image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"{name}.png")
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
 table = json.loads(tp.read_text()) if tp.exists() else {"table": {}}
-table["table"][f"{a.kind}/{a.order}{variant}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": f"results/{name}.json"}
+table["table"][f"{a.kind}/{a.order}{'+glimpse' if a.glimpse else ''}{variant}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": f"results/{name}.json"}
 tp.write_text(json.dumps(table, indent=1))
 print(json.dumps(res, indent=1))
 if a.ship:
@@ -127,7 +142,7 @@ if a.ship:
     card = f"""# elm-{a.kind}: {a.kind} to tree
 
 - **Data**: the first {len(train)} training trees of the `elm` dataset (`data/elm`), turned about z and mirrored, then {'photographed by `scan.silhouette` (front camera, 224 px, read at 112 px)' if a.kind == 'image' else 'sketched by `scan.sketch` (2D segments)' if a.kind == 'sketch' else 'sampled (200 points of the branch surfaces)'}; sequences in {a.order.upper()} order.
-- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; decoder {'started from `' + str(a.init) + '`' if a.init else 'trained from scratch'}.
+- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}{'; the glimpse (a second small CNN, sampled where each token draws, `condition.Glimpse`)' if model.glimpse is not None else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; {('started from the conditional model `' + a.from_ + '` as it was at commit ' + res.get('train_commit', res['commit'])[:7]) if a.from_ else ('decoder started from `' + str(a.init) + '`') if a.init else 'decoder trained from scratch'}.
 - **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on {a.threads} thread{'s' if a.threads > 1 else ''} of a 2-core CPU.
 - **Command**: `{res.get('train_command', res['command'])}`{'; evaluated and shipped by `' + res['command'] + '`' if 'train_command' in res else ''}; commit {res['commit']}.
 - **Metrics** on {a.n_eval} held-out trees (`results/{name}.json`): held-out loss {res['held_out_loss']:.3f}; {ev}.

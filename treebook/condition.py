@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import re
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 
@@ -17,17 +18,17 @@ import torch.nn.functional as F
 from tqdm.auto import tqdm
 
 from .tree import Frame, Tree, TreebookError, _atomic_write
-from .tokens import BLOCK, COND, PAD, SOS, Tokenizer
+from .tokens import BLOCK, COND, N_VALUES, PAD, SOS, Tokenizer
 from .hourglass import ModelConfig, TreeTransformer
 from .growth import condition_prefix, extend_context, fit, generate
 
 # %% auto #0
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
-           'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'points_input', 'read_lines',
-           'ConditionalTree', 'condition_of', 'cond_batch', 'save_conditional', 'load_conditional',
-           'sample_conditional', 'image_to_tree', 'sketch_target', 'sketch_to_tree', 'points_to_tree',
-           'silhouette_scores', 'evaluate_image', 'evaluate_points', 'fit_silhouette', 'best_by_silhouette',
-           'demo_image_to_tree']
+           'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target', 'points_input',
+           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'glimpsing', 'condition_of', 'cond_batch',
+           'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree', 'sketch_to_tree',
+           'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points', 'fit_silhouette',
+           'best_by_silhouette', 'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -123,6 +124,15 @@ def sketch_input(lines) -> np.ndarray:
     if len(out) > MAX_LINES: out = out[np.random.default_rng(0).choice(len(out), MAX_LINES, replace=False)]
     return out.astype(np.float32)
 
+def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
+    "(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by the front camera."
+    from PIL import Image, ImageDraw
+    from treebook.scan import _to_px
+    s = np.asarray(segments, np.float64)
+    img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
+    for a, b in zip(_to_px(s[:, :2], size), _to_px(s[:, 2:], size)): draw.line([tuple(a), tuple(b)], fill=255, width=width)
+    return np.asarray(img) > 0
+
 def points_input(points, seed: int = 0, up: str = "z"):
     "(Frame, (200, 3) float32 points in that frame): the cloud (array or scan file; `up` its vertical axis) resampled to 200 points, base at the origin, height 1."
     from treebook.pointio import read_points
@@ -186,9 +196,11 @@ def _batch_cond(kind, items):
 
 class ConditionalTree(nn.Module):
     "Encoder + 50-query prompt + hourglass decoder: a tree conditioned on an image, a sketch or points."
-    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4, broadcast: bool = True):
+    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4, broadcast: bool = True,
+                 glimpse: bool = False, tok: Tokenizer | None = None):
         super().__init__()
         if kind not in KINDS: raise TreebookError(f"unknown condition {kind!r}: use one of {', '.join(KINDS)}")
+        if glimpse and kind == "points": raise TreebookError("the glimpse reads pictures (an image, a sketch's strokes); a points model has none")
         dim = decoder.config.dim
         self.kind, self.n_queries, self.heads, self.broadcast = kind, n_queries, heads, broadcast
         self.encoder = ImageEncoder(dim) if kind == "image" else SetEncoder(4 if kind == "sketch" else 3, dim, heads)
@@ -197,6 +209,7 @@ class ConditionalTree(nn.Module):
             self.summary = nn.Linear(dim, dim)
             nn.init.zeros_(self.summary.weight); nn.init.zeros_(self.summary.bias)
         self.decoder = decoder
+        self.glimpse = Glimpse(dim, tok) if glimpse else None   # image features where the tree is being drawn (below)
 
     def condition(self, x, mask=None) -> tuple:
         "(prefix (B, 56, dim), bias (B, dim) or None): the query prompt and the broadcast summary of the input."
@@ -209,14 +222,84 @@ class ConditionalTree(nn.Module):
 
     def prefix(self, x, mask=None): "(B, 56, dim) condition vectors."; return self.condition(x, mask)[0]
 
+    @contextmanager
+    def conditioned(self, x, mask=None):
+        "Within the block the decoder reads the glimpse of `x` (if the model has one); yields (prefix, bias) of `x`."
+        prefix, bias = self.condition(x, mask)
+        if self.glimpse is None: yield prefix, bias; return
+        picture = x if self.kind == "image" else stroke_images(x, mask)
+        with glimpsing(self.decoder, self.glimpse, self.glimpse.maps(picture)): yield prefix, bias
+
     def loss(self, batch) -> torch.Tensor:
         "Cross-entropy of the tree tokens given the condition; `batch` = (x, mask, seqs (B, L))."
         x, mask, seqs = batch
         P = self.prompt.length
         full = torch.cat([torch.full((seqs.shape[0], P), COND, dtype=torch.long), torch.as_tensor(seqs)], 1)
-        with condition_prefix(self.decoder, *self.condition(x, mask)): logits = self.decoder(full[:, :-1])
+        with self.conditioned(x, mask) as (prefix, bias), condition_prefix(self.decoder, prefix, bias): logits = self.decoder(full[:, :-1])
         target = full[:, 1:].masked_fill(full[:, 1:] >= COND, PAD)
         return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
+
+# %% ../nbs/10a_condition.ipynb #67fb5fa3
+class Glimpse(nn.Module):
+    "Features of the input image at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens so far."
+    def __init__(self, dim: int, tok: Tokenizer | None = None, width: int = 32):
+        super().__init__()
+        conv = lambda a, b, s=1: nn.Conv2d(a, b, 3, stride=s, padding=1)
+        self.fine = nn.Sequential(conv(1, width), nn.GELU(), conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
+        self.coarse = nn.Sequential(conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU(),
+                                    conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
+        self.out = nn.Sequential(nn.Linear(2 * width + 1, dim), nn.GELU(), nn.Linear(dim, dim))
+        nn.init.zeros_(self.out[-1].weight); nn.init.zeros_(self.out[-1].bias)  # zero at first: a trained decoder starts unchanged
+        gx = gz = np.zeros(N_VALUES)
+        if tok is not None:  # the grid_sample coordinate (-1..1) of each x bin and each z bin in the front camera's window
+            from treebook.scan import WINDOW
+            x0, x1, z0, z1 = WINDOW
+            gx, gz = (tok.centres[0] - x0) / (x1 - x0) * 2 - 1, (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1
+        self.register_buffer("gx", torch.as_tensor(gx, dtype=torch.float32)); self.register_buffer("gz", torch.as_tensor(gz, dtype=torch.float32))
+
+    def maps(self, x) -> tuple:
+        "(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112)."
+        f = self.fine(x)
+        return f, self.coarse(f)
+
+    def forward(self, maps, idx, start: int = 0, carry=None) -> tuple:
+        """((B, T, dim) features for tokens `idx` (B, T) at positions `start`..., (last x token, last z token) (B,) each);
+        `carry`: those of the positions before `start` (-1: none yet)."""
+        B, T = idx.shape
+        slot = torch.arange(start, start + T) % BLOCK
+        value = idx < N_VALUES
+        if carry is None: carry = (torch.full((B,), -1), torch.full((B,), -1))
+        def last(is_axis, before):
+            at = torch.where(is_axis, torch.arange(T).expand(B, T), -1).cummax(1).values
+            return torch.where(at >= 0, idx.gather(1, at.clamp_min(0)), before[:, None].expand(B, T))
+        lx = last(value & ((slot == 0) | (slot == 4)), carry[0])
+        lz = last(value & ((slot == 2) | (slot == 6)), carry[1])
+        known = ((lx >= 0) & (lz >= 0))[..., None]
+        grid = torch.stack([self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)]], -1)[:, :, None]   # (B, T, 1, 2)
+        feats = [F.grid_sample(m.expand(B, -1, -1, -1) if m.shape[0] != B else m, grid, align_corners=False)[..., 0].transpose(1, 2)
+                 for m in maps]
+        return self.out(torch.cat(feats + [known.float()], -1)) * known, (lx[:, -1], lz[:, -1])
+
+def stroke_images(x, mask=None) -> torch.Tensor:
+    "(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front camera (`sketch_target`)."
+    ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.numpy()
+    return torch.from_numpy(np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.numpy(), ok)]))[:, None]
+
+@contextmanager
+def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
+    "Within the block, `decoder` adds the `glimpse` of image `maps` to every token's embedding (tokens must come in order)."
+    if glimpse is None: yield decoder; return
+    prev, base, state = decoder.__dict__.get("embed"), decoder.embed, {"next": 0, "carry": None}
+    def embed(idx, start: int = 0):
+        if start and start != state["next"]: raise TreebookError(f"the glimpse reads tokens in order: expected position {state['next']}, got {start}")
+        g, carry = glimpse(maps, idx, start, state["carry"] if start else None)
+        state.update(next=start + idx.shape[1], carry=carry)
+        return base(idx, start) + g
+    decoder.embed = embed
+    try: yield decoder
+    finally:
+        if prev is None: del decoder.embed
+        else: decoder.embed = prev
 
 # %% ../nbs/10a_condition.ipynb #17c85a7d
 def condition_of(kind: str, tree: Tree, seed: int = 0):
@@ -246,7 +329,7 @@ def save_conditional(model: ConditionalTree, tok: Tokenizer, path, **meta) -> Pa
     "Write a conditional model to `path` (.pt) and its tokenizer to `path` with .tok.json, atomically."
     path = Path(path)
     ck = {"format": "treebook.conditional", "version": COND_VERSION, "kind": model.kind, "n_queries": model.n_queries,
-          "heads": model.heads, "broadcast": model.broadcast, "config": asdict(model.decoder.config),
+          "heads": model.heads, "broadcast": model.broadcast, "glimpse": model.glimpse is not None, "config": asdict(model.decoder.config),
           "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}, "meta": meta}
     tok.save(path.with_suffix(".tok.json"))
     return _atomic_write(path, lambda f: torch.save(ck, f))
@@ -269,7 +352,8 @@ def load_conditional(model="elm-image"):
     if ck.get("version") != COND_VERSION: raise TreebookError(f"{p} has version {ck.get('version')}; this treebook reads {COND_VERSION}")
     tp = p.with_suffix(".tok.json")
     if not tp.is_file(): raise TreebookError(f"no tokenizer beside {p}: expected {tp.name}")
-    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"], ck.get("broadcast", False))
+    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"], ck.get("broadcast", False),
+                        ck.get("glimpse", False))
     m.load_state_dict(ck["state_dict"])
     return m.eval(), Tokenizer.load(tp)
 
@@ -280,9 +364,9 @@ def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: floa
     net, tok = load_conditional(model)
     net.eval()
     x, mask = _batch_cond(net.kind, [cond])
-    prefix, bias = net.condition(x, mask)
-    seqs = generate(net.decoder, n, tok=tok, prefix=prefix, bias=bias, temperature=temperature, top_p=top_p, top_k=top_k,
-                    seed=seed, progress=progress)
+    with net.conditioned(x, mask) as (prefix, bias):
+        seqs = generate(net.decoder, n, tok=tok, prefix=prefix, bias=bias, temperature=temperature, top_p=top_p, top_k=top_k,
+                        seed=seed, progress=progress)
     return [tok.decode(s) for s in seqs]
 
 # %% ../nbs/10a_condition.ipynb #f499f10d
@@ -293,15 +377,6 @@ def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool
     _check_candidates(candidates)
     trees = sample_conditional(model, image_input(image), n * candidates, seed, **kw)
     return _choose(trees, n, candidates, fit, lambda: silhouette_target(image))
-
-def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
-    "(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by the front camera."
-    from PIL import Image, ImageDraw
-    from treebook.scan import _to_px
-    s = np.asarray(segments, np.float64)
-    img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
-    for a, b in zip(_to_px(s[:, :2], size), _to_px(s[:, 2:], size)): draw.line([tuple(a), tuple(b)], fill=255, width=width)
-    return np.asarray(img) > 0
 
 def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", fit: bool = False, candidates: int = 1, **kw) -> list:
     """`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them.

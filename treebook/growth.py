@@ -180,9 +180,10 @@ def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
     if prefix is None and bias is None: yield model; return
     P = 0 if prefix is None else prefix.shape[1]
     if P % BLOCK: raise TreebookError(f"a condition prefix must be a whole number of branch blocks (a multiple of 8), got {P}")
-    base = type(model).embed
+    prev = model.__dict__.get("embed")   # another condition already in place (condition.glimpsing): add to it
+    base = model.embed
     def embed(idx, start: int = 0):
-        x = base(model, idx, start)
+        x = base(idx, start)
         if bias is not None: x = x + bias[:, None]  # one vector for the whole sequence (broadcast over a batch of samples)
         k = min(P - start, idx.shape[1])
         if k <= 0: return x
@@ -190,7 +191,9 @@ def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
         return torch.cat([x[:, :k] + pre, x[:, k:]], 1)
     model.embed = embed
     try: yield model
-    finally: del model.embed
+    finally:
+        if prev is None: del model.embed
+        else: model.embed = prev
 
 @torch.no_grad()
 def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, bias=None, stages: int = 1,
