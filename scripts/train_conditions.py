@@ -39,7 +39,7 @@ p.add_argument("--fit", action="store_true", help="image / sketch: fit each gene
 p.add_argument("--candidates", type=int, default=1, help="image / sketch: keep the best of this many samples by IoU with the input")
 p.add_argument("--no-broadcast", action="store_true", help="the prompt alone, without the summary added to every token (models before it)")
 p.add_argument("--from", dest="from_", default=None, help="start from this conditional model (shipped name or .pt); its decoder replaces --init")
-p.add_argument("--glimpse", action="store_true", help="image: add the glimpse, the image features where the tree is being drawn")
+p.add_argument("--glimpse", action="store_true", help="add the glimpse: features of the input seen from the front (image, strokes, points as dots) where the tree is being drawn")
 a = p.parse_args()
 variant = ("+fit" if a.fit else "") + (f"+best{a.candidates}" if a.candidates > 1 else "")
 if variant and a.kind == "points": p.error("--fit and --candidates are for --kind image or sketch")
@@ -50,7 +50,6 @@ out.mkdir(parents=True, exist_ok=True)
 train, test = load_trees(root / a.data, "train")[:a.trees], load_trees(root / a.data, "test")[:a.n_eval]
 P = -(-N_QUERIES // 8) * 8
 max_len = P + max(t.n for t in train + test) * 8 + 16
-if a.glimpse and a.kind != "image": p.error("--glimpse is for --kind image")
 if a.from_:
     src_model, tok = load_conditional(a.from_)
     if src_model.kind != a.kind: p.error(f"--from {a.from_} is a {src_model.kind} model, not {a.kind}")
@@ -64,12 +63,13 @@ else:
     dec = TreeTransformer(ModelConfig(arch="full", dim=a.dim, depth=a.depth, heads=a.heads, max_len=max_len))
 tok.save(out / "tokenizer.json")
 torch.manual_seed(a.seed + 1)
-model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=not a.no_broadcast, glimpse=a.glimpse, tok=tok)
+broadcast = src_model.broadcast if a.from_ else not a.no_broadcast   # a model made before the summary keeps none
+model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=broadcast, glimpse=a.glimpse, tok=tok)
 if a.from_:   # the source's encoder, prompt and summary; a glimpse it lacks starts at zero
     missing, unexpected = model.load_state_dict({k: v for k, v in src_model.state_dict().items() if not k.startswith("decoder.")}, strict=False)
     if unexpected or any(not (k.startswith("decoder.") or k.startswith("glimpse.")) for k in missing):
         p.error(f"--from {a.from_} does not fit this model (missing {[k for k in missing if not k.startswith('decoder.')]}, unexpected {unexpected})")
-meta = {"kind": a.kind, "order": a.order, "init": a.from_ or a.init, "broadcast": not a.no_broadcast, "glimpse": a.glimpse, "trees": len(train),
+meta = {"kind": a.kind, "order": a.order, "init": a.from_ or a.init, "broadcast": broadcast, "glimpse": a.glimpse, "trees": len(train),
         "batch": a.batch, "lr": a.lr, "seed": a.seed}
 if a.init and not a.from_ and Path(a.init).suffix == ".pt": meta["init_meta"] = {k: v for k, v in torch.load(a.init, weights_only=True).get("meta", {}).items() if k in ("step", "val_loss")}
 if not a.eval_only:
@@ -78,7 +78,7 @@ if not a.eval_only:
     print(json.dumps(r), flush=True)
 ck = torch.load(out / "last.pt", weights_only=True)
 if model.broadcast and "summary.weight" not in ck["model"]:  # a run from before the broadcast summary
-    model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=False); meta["broadcast"] = False
+    model = ConditionalTree(a.kind, dec, heads=dec.config.heads, broadcast=False, glimpse=a.glimpse, tok=tok); meta["broadcast"] = False
 model.load_state_dict(ck["model"]); model.eval()
 res = {"command": "python scripts/train_conditions.py " + " ".join(sys.argv[1:]),
        "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
@@ -142,7 +142,7 @@ if a.ship:
     card = f"""# elm-{a.kind}: {a.kind} to tree
 
 - **Data**: the first {len(train)} training trees of the `elm` dataset (`data/elm`), turned about z and mirrored, then {'photographed by `scan.silhouette` (front camera, 224 px, read at 112 px)' if a.kind == 'image' else 'sketched by `scan.sketch` (2D segments)' if a.kind == 'sketch' else 'sampled (200 points of the branch surfaces)'}; sequences in {a.order.upper()} order.
-- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}{'; the glimpse (a second small CNN, sampled where each token draws, `condition.Glimpse`)' if model.glimpse is not None else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; {('started from the conditional model `' + a.from_ + '` as it was at commit ' + res.get('train_commit', res['commit'])[:7]) if a.from_ else ('decoder started from `' + str(a.init) + '`') if a.init else 'decoder trained from scratch'}.
+- **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}{'; the glimpse (a second small CNN over the ' + {'image': 'silhouette', 'sketch': 'strokes drawn by the front camera', 'points': 'points drawn as dots by the front camera'}[a.kind] + ', sampled where each token draws, `condition.Glimpse`)' if model.glimpse is not None else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; {('started from the conditional model `' + a.from_ + '` as it was at commit ' + res.get('train_commit', res['commit'])[:7]) if a.from_ else ('decoder started from `' + str(a.init) + '`') if a.init else 'decoder trained from scratch'}.
 - **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on {a.threads} thread{'s' if a.threads > 1 else ''} of a 2-core CPU.
 - **Command**: `{res.get('train_command', res['command'])}`{'; evaluated and shipped by `' + res['command'] + '`' if 'train_command' in res else ''}; commit {res['commit']}.
 - **Metrics** on {a.n_eval} held-out trees (`results/{name}.json`): held-out loss {res['held_out_loss']:.3f}; {ev}.

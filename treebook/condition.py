@@ -25,10 +25,10 @@ from .growth import condition_prefix, extend_context, fit, generate
 # %% auto #0
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
            'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target', 'points_input',
-           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'glimpsing', 'condition_of', 'cond_batch',
-           'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree', 'sketch_to_tree',
-           'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points', 'fit_silhouette',
-           'best_by_silhouette', 'demo_image_to_tree']
+           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_images', 'glimpsing', 'condition_of',
+           'cond_batch', 'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree',
+           'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points',
+           'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -200,7 +200,6 @@ class ConditionalTree(nn.Module):
                  glimpse: bool = False, tok: Tokenizer | None = None):
         super().__init__()
         if kind not in KINDS: raise TreebookError(f"unknown condition {kind!r}: use one of {', '.join(KINDS)}")
-        if glimpse and kind == "points": raise TreebookError("the glimpse reads pictures (an image, a sketch's strokes); a points model has none")
         dim = decoder.config.dim
         self.kind, self.n_queries, self.heads, self.broadcast = kind, n_queries, heads, broadcast
         self.encoder = ImageEncoder(dim) if kind == "image" else SetEncoder(4 if kind == "sketch" else 3, dim, heads)
@@ -227,7 +226,7 @@ class ConditionalTree(nn.Module):
         "Within the block the decoder reads the glimpse of `x` (if the model has one); yields (prefix, bias) of `x`."
         prefix, bias = self.condition(x, mask)
         if self.glimpse is None: yield prefix, bias; return
-        picture = x if self.kind == "image" else stroke_images(x, mask)
+        picture = x if self.kind == "image" else stroke_images(x, mask) if self.kind == "sketch" else point_images(x)
         with glimpsing(self.decoder, self.glimpse, self.glimpse.maps(picture)): yield prefix, bias
 
     def loss(self, batch) -> torch.Tensor:
@@ -284,6 +283,17 @@ def stroke_images(x, mask=None) -> torch.Tensor:
     "(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front camera (`sketch_target`)."
     ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.numpy()
     return torch.from_numpy(np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.numpy(), ok)]))[:, None]
+
+def point_images(x, radius: float = 2.0) -> torch.Tensor:
+    "(B, 1, 112, 112) pictures of prepared clouds `x` (B, n, 3): each point a dot of `radius` pixels (of 224) seen by the front camera."
+    from PIL import Image, ImageDraw
+    from treebook.scan import _to_px
+    out = []
+    for q in x.numpy():
+        img = Image.new("L", (224, 224), 0); draw = ImageDraw.Draw(img)
+        for u, v in _to_px(q[:, [0, 2]], 224): draw.ellipse([u - radius, v - radius, u + radius, v + radius], fill=255)
+        out.append(_resized(np.asarray(img, np.float32) / 255, IMAGE_INPUT))
+    return torch.from_numpy(np.stack(out))[:, None]
 
 @contextmanager
 def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
