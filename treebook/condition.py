@@ -25,7 +25,7 @@ from .growth import condition_prefix, extend_context, fit, generate
 # %% auto #0
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
            'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target', 'points_input',
-           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_images', 'glimpsing', 'condition_of',
+           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_volumes', 'glimpsing', 'condition_of',
            'cond_batch', 'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree',
            'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points',
            'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
@@ -208,7 +208,7 @@ class ConditionalTree(nn.Module):
             self.summary = nn.Linear(dim, dim)
             nn.init.zeros_(self.summary.weight); nn.init.zeros_(self.summary.bias)
         self.decoder = decoder
-        self.glimpse = Glimpse(dim, tok) if glimpse else None   # image features where the tree is being drawn (below)
+        self.glimpse = Glimpse(dim, tok, volume=kind == "points") if glimpse else None   # features where the tree is being drawn (below)
 
     def condition(self, x, mask=None) -> tuple:
         "(prefix (B, 56, dim), bias (B, dim) or None): the query prompt and the broadcast summary of the input."
@@ -226,7 +226,7 @@ class ConditionalTree(nn.Module):
         "Within the block the decoder reads the glimpse of `x` (if the model has one); yields (prefix, bias) of `x`."
         prefix, bias = self.condition(x, mask)
         if self.glimpse is None: yield prefix, bias; return
-        picture = x if self.kind == "image" else stroke_images(x, mask) if self.kind == "sketch" else point_images(x)
+        picture = x if self.kind == "image" else stroke_images(x, mask) if self.kind == "sketch" else point_volumes(x)
         with glimpsing(self.decoder, self.glimpse, self.glimpse.maps(picture)): yield prefix, bias
 
     def loss(self, batch) -> torch.Tensor:
@@ -240,60 +240,64 @@ class ConditionalTree(nn.Module):
 
 # %% ../nbs/10a_condition.ipynb #67fb5fa3
 class Glimpse(nn.Module):
-    "Features of the input image at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens so far."
-    def __init__(self, dim: int, tok: Tokenizer | None = None, width: int = 32):
+    """Features of the input at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens so far
+    (a picture seen from the front), or with `volume` a 3D CNN's maps sampled at the last x, y and z (a cloud's voxel grid)."""
+    def __init__(self, dim: int, tok: Tokenizer | None = None, width: int = 32, volume: bool = False):
         super().__init__()
-        conv = lambda a, b, s=1: nn.Conv2d(a, b, 3, stride=s, padding=1)
+        self.volume = volume
+        if volume: width = 16
+        Conv = nn.Conv3d if volume else nn.Conv2d
+        conv = lambda a, b, s=1: Conv(a, b, 3, stride=s, padding=1)
         self.fine = nn.Sequential(conv(1, width), nn.GELU(), conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
         self.coarse = nn.Sequential(conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU(),
                                     conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
         self.out = nn.Sequential(nn.Linear(2 * width + 1, dim), nn.GELU(), nn.Linear(dim, dim))
         nn.init.zeros_(self.out[-1].weight); nn.init.zeros_(self.out[-1].bias)  # zero at first: a trained decoder starts unchanged
-        gx = gz = np.zeros(N_VALUES)
-        if tok is not None:  # the grid_sample coordinate (-1..1) of each x bin and each z bin in the front camera's window
+        gx = gy = gz = np.zeros(N_VALUES)
+        if tok is not None:  # the grid_sample coordinate (-1..1) of each bin in the front camera's window (y: as wide as x)
             from treebook.scan import WINDOW
             x0, x1, z0, z1 = WINDOW
-            gx, gz = (tok.centres[0] - x0) / (x1 - x0) * 2 - 1, (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1
-        self.register_buffer("gx", torch.as_tensor(gx, dtype=torch.float32)); self.register_buffer("gz", torch.as_tensor(gz, dtype=torch.float32))
+            gx, gy = (tok.centres[0] - x0) / (x1 - x0) * 2 - 1, (tok.centres[1] - x0) / (x1 - x0) * 2 - 1
+            gz = (tok.centres[2] - z0) / (z1 - z0) * 2 - 1 if volume else (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1  # image rows run down
+        for k, v in (("gx", gx), ("gy", gy), ("gz", gz)): self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
 
     def maps(self, x) -> tuple:
-        "(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112)."
+        "(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112); with `volume` (16^3, 4^3) maps of grids (B, 1, 32, 32, 32)."
         f = self.fine(x)
         return f, self.coarse(f)
 
     def forward(self, maps, idx, start: int = 0, carry=None) -> tuple:
-        """((B, T, dim) features for tokens `idx` (B, T) at positions `start`..., (last x token, last z token) (B,) each);
+        """((B, T, dim) features for tokens `idx` (B, T) at positions `start`..., (last x, y, z tokens) (B,) each);
         `carry`: those of the positions before `start` (-1: none yet)."""
         B, T = idx.shape
         slot = torch.arange(start, start + T) % BLOCK
         value = idx < N_VALUES
-        if carry is None: carry = (torch.full((B,), -1), torch.full((B,), -1))
+        if carry is None: carry = tuple(torch.full((B,), -1) for _ in range(3))
         def last(is_axis, before):
             at = torch.where(is_axis, torch.arange(T).expand(B, T), -1).cummax(1).values
             return torch.where(at >= 0, idx.gather(1, at.clamp_min(0)), before[:, None].expand(B, T))
-        lx = last(value & ((slot == 0) | (slot == 4)), carry[0])
-        lz = last(value & ((slot == 2) | (slot == 6)), carry[1])
-        known = ((lx >= 0) & (lz >= 0))[..., None]
-        grid = torch.stack([self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)]], -1)[:, :, None]   # (B, T, 1, 2)
-        feats = [F.grid_sample(m.expand(B, -1, -1, -1) if m.shape[0] != B else m, grid, align_corners=False)[..., 0].transpose(1, 2)
+        lx, ly, lz = (last(value & ((slot == a) | (slot == a + 4)), carry[a]) for a in range(3))
+        known = ((lx >= 0) & (lz >= 0) & ((ly >= 0) | (not self.volume)))[..., None]
+        axes = (self.gx[lx.clamp_min(0)], self.gy[ly.clamp_min(0)], self.gz[lz.clamp_min(0)]) if self.volume else (self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)])
+        grid = torch.stack(axes, -1).view(B, T, *[1] * (len(axes) - 1), len(axes))   # (B, T, 1, 2) or (B, T, 1, 1, 3)
+        feats = [F.grid_sample(m.expand(B, *m.shape[1:]) if m.shape[0] != B else m, grid, align_corners=False).reshape(B, m.shape[1], T).transpose(1, 2)
                  for m in maps]
-        return self.out(torch.cat(feats + [known.float()], -1)) * known, (lx[:, -1], lz[:, -1])
+        return self.out(torch.cat(feats + [known.float()], -1)) * known, (lx[:, -1], ly[:, -1], lz[:, -1])
 
 def stroke_images(x, mask=None) -> torch.Tensor:
     "(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front camera (`sketch_target`)."
     ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.numpy()
     return torch.from_numpy(np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.numpy(), ok)]))[:, None]
 
-def point_images(x, radius: float = 2.0) -> torch.Tensor:
-    "(B, 1, 112, 112) pictures of prepared clouds `x` (B, n, 3): each point a dot of `radius` pixels (of 224) seen by the front camera."
-    from PIL import Image, ImageDraw
-    from treebook.scan import _to_px
-    out = []
-    for q in x.numpy():
-        img = Image.new("L", (224, 224), 0); draw = ImageDraw.Draw(img)
-        for u, v in _to_px(q[:, [0, 2]], 224): draw.ellipse([u - radius, v - radius, u + radius, v + radius], fill=255)
-        out.append(_resized(np.asarray(img, np.float32) / 255, IMAGE_INPUT))
-    return torch.from_numpy(np.stack(out))[:, None]
+def point_volumes(x, size: int = 32) -> torch.Tensor:
+    "(B, 1, size, size, size) grids (z, y, x) of prepared clouds `x` (B, n, 3): points per voxel of the camera's window (y as wide as x), blurred, at most 1."
+    from treebook.scan import WINDOW
+    x0, x1, z0, z1 = WINDOW
+    lo, hi = torch.tensor([x0, x0, z0]), torch.tensor([x1, x1, z1])
+    i = ((x - lo) / (hi - lo) * size).long().clamp(0, size - 1)                                    # (B, n, 3) voxel of each point
+    flat = (i[..., 2] * size + i[..., 1]) * size + i[..., 0]
+    g = torch.zeros(x.shape[0], size ** 3).scatter_add_(1, flat, torch.ones(flat.shape)).view(-1, 1, size, size, size)
+    return F.avg_pool3d(g, 3, 1, 1).mul(27 / 4).clamp(max=1.0)
 
 @contextmanager
 def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
