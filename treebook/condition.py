@@ -259,7 +259,7 @@ class Glimpse(nn.Module):
             x0, x1, z0, z1 = WINDOW
             gx, gy = (tok.centres[0] - x0) / (x1 - x0) * 2 - 1, (tok.centres[1] - x0) / (x1 - x0) * 2 - 1
             gz = (tok.centres[2] - z0) / (z1 - z0) * 2 - 1 if volume else (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1  # image rows run down
-        for k, v in (("gx", gx), ("gy", gy), ("gz", gz)): self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
+        for k, v in (("gx", gx), ("gz", gz)) + ((("gy", gy),) if volume else ()): self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
 
     def maps(self, x) -> tuple:
         "(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112); with `volume` (16^3, 4^3) maps of grids (B, 1, 32, 32, 32)."
