@@ -15,12 +15,11 @@ Writes results/partnet_errors.json.
 import argparse, json, subprocess, sys, time
 from pathlib import Path
 import numpy as np, torch
-from scipy.spatial import cKDTree
 
 root = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(root)); sys.path.insert(0, str(root / "scripts"))
-from train_partnet import load_or_make_pool, batch
-from treebook.partnet import load_partnet, predict_seeds, affinity_scores
+from train_partnet import load_or_make_pool, seed_outputs
+from treebook.partnet import load_partnet, affinity_scores
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("--work", default=str(root / "tmp" / "partnet5")); ap.add_argument("--threads", type=int, default=2)
@@ -32,16 +31,6 @@ if not (work / "test_pool.npz").exists(): sys.exit(f"no scan pools in {work}: ru
 model = load_partnet(); n, th = model.cfg.n_points, model.cfg.threshold
 
 
-def outputs(pool, idx, seed):
-    res = []
-    for k in idx:
-        q, part, _ = batch(pool, [k], n, seed + k, aug=False)
-        o = predict_seeds(model, q[0].numpy(), seed=seed, tta=model.cfg.tta)
-        o.update(q=q[0].numpy(), part=part[0].numpy()); o["seed_part"] = o["part"][o["seed_idx"]]
-        res.append(o)
-    return res
-
-
 def majority(o):
     S = len(o["seed_xyz"]); maj = np.full(S, -1)
     for s in range(S):
@@ -51,7 +40,7 @@ def majority(o):
 
 
 test = load_or_make_pool(work / "test_pool.npz")
-outs = outputs(test, range(len(test)), 12345)   # the held-out seeds of train_partnet.py's evaluation
+outs = seed_outputs(model, test, n)   # exactly train_partnet.py's evaluation of the held-out scans
 mixed, oracle, net, fp, fn, fp_mixed, fn_mixed = [], [], [], 0, 0, 0, 0
 for o in outs:
     sp, maj = o["seed_part"], majority(o)
@@ -101,7 +90,7 @@ def pair_features(o):
 if a.refine:
     from sklearn.ensemble import HistGradientBoostingClassifier
     train = load_or_make_pool(work / "train_pool.npz")
-    tr = outputs(train, range(len(train))[-a.refine_scans:], 4242)
+    tr = seed_outputs(model, train[-a.refine_scans:], n, seed=4242)
     feats = [pair_features(o) for o in tr]
     clf = HistGradientBoostingClassifier(max_iter=300, random_state=0).fit(np.concatenate([f[0][f[2]] for f in feats]),
                                                                              np.concatenate([f[1][f[2]] for f in feats]))

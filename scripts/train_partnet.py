@@ -68,12 +68,12 @@ def batch(pool, idx, n, seed, aug=True):
 
 
 def seed_outputs(model, pool, n, seed=12345) -> list:
-    "Per scan of `pool` (no augmentation, a fixed subset): affinity probabilities on the scored pairs, the pairs, seed parts, fine clusters, labels."
+    "Per scan of `pool` (no augmentation, a fixed subset): `predict_seeds`'s outputs, the cloud `q`, its labels `part`, the seeds' parts, junction accuracy."
     outs = []
     for k, raw in enumerate(pool):
         q, part, junc = batch(pool, [k], n, seed + k, aug=False)
         o = predict_seeds(model, q[0].numpy(), seed=seed, tta=model.cfg.tta)  # pairs the network does not score are "not one branch"
-        outs.append(dict(prob=o["prob"], pairs=o["pairs"], seed_part=part[0].numpy()[o["seed_idx"]], part=part[0].numpy(), fine=o["fine"],
+        outs.append(dict(o, q=q[0].numpy(), seed_part=part[0].numpy()[o["seed_idx"]], part=part[0].numpy(),
                          junction_acc=float(((o["junction"] > 0) == junc[0].numpy().astype(bool)).mean())))
     model.train()
     return outs

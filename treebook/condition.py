@@ -20,7 +20,7 @@ from tqdm.auto import tqdm
 from .tree import Frame, Tree, TreebookError, _atomic_write
 from .tokens import BLOCK, COND, N_VALUES, PAD, SOS, Tokenizer
 from .hourglass import ModelConfig, TreeTransformer
-from .growth import condition_prefix, extend_context, fit, generate
+from .growth import condition_prefix, extend_context, fit, generate, wrap_embed
 
 # %% auto #0
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
@@ -242,10 +242,10 @@ class ConditionalTree(nn.Module):
 class Glimpse(nn.Module):
     """Features of the input at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens so far
     (a picture seen from the front), or with `volume` a 3D CNN's maps sampled at the last x, y and z (a cloud's voxel grid)."""
-    def __init__(self, dim: int, tok: Tokenizer | None = None, width: int = 32, volume: bool = False):
+    def __init__(self, dim: int, tok: Tokenizer | None = None, width: int | None = None, volume: bool = False):
         super().__init__()
         self.volume = volume
-        if volume: width = 16
+        width = width or (16 if volume else 32)  # 3D maps cost more per channel
         Conv = nn.Conv3d if volume else nn.Conv2d
         conv = lambda a, b, s=1: Conv(a, b, 3, stride=s, padding=1)
         self.fine = nn.Sequential(conv(1, width), nn.GELU(), conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
@@ -303,17 +303,13 @@ def point_volumes(x, size: int = 32) -> torch.Tensor:
 def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
     "Within the block, `decoder` adds the `glimpse` of image `maps` to every token's embedding (tokens must come in order)."
     if glimpse is None: yield decoder; return
-    prev, base, state = decoder.__dict__.get("embed"), decoder.embed, {"next": 0, "carry": None}
-    def embed(idx, start: int = 0):
+    state = {"next": 0, "carry": None}
+    def add(x, idx, start):
         if start and start != state["next"]: raise TreebookError(f"the glimpse reads tokens in order: expected position {state['next']}, got {start}")
         g, carry = glimpse(maps, idx, start, state["carry"] if start else None)
         state.update(next=start + idx.shape[1], carry=carry)
-        return base(idx, start) + g
-    decoder.embed = embed
-    try: yield decoder
-    finally:
-        if prev is None: del decoder.embed
-        else: decoder.embed = prev
+        return x + g
+    with wrap_embed(decoder, add): yield decoder
 
 # %% ../nbs/10a_condition.ipynb #17c85a7d
 def condition_of(kind: str, tree: Tree, seed: int = 0):

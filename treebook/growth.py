@@ -23,9 +23,9 @@ from .hourglass import DecodeState, ModelConfig, TreeTransformer
 from .sampling import TreeGrammar, pick, pick_block
 
 # %% auto #0
-__all__ = ['GROWTH_MODES', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar', 'condition_prefix',
-           'generate', 'fit', 'growth_batch', 'lm_loss', 'extend_context', 'grow_sequence', 'stage_picture',
-           'write_growth', 'complete', 'tree_picture', 'write_trees', 'demo_growth']
+__all__ = ['GROWTH_MODES', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar', 'wrap_embed',
+           'condition_prefix', 'generate', 'fit', 'growth_batch', 'lm_loss', 'extend_context', 'grow_sequence',
+           'stage_picture', 'write_growth', 'complete', 'tree_picture', 'write_trees', 'demo_growth']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -175,25 +175,28 @@ class StagedGrammar(TreeGrammar):
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #018dd5bd
 @contextmanager
+def wrap_embed(model: TreeTransformer, change):
+    "Within the block, `model.embed(idx, start)` returns `change(x, idx, start)` of what it returned before; such blocks nest."
+    prev, base = model.__dict__.get("embed"), model.embed
+    model.embed = lambda idx, start=0: change(base(idx, start), idx, start)
+    try: yield model
+    finally:
+        if prev is None: del model.embed
+        else: model.embed = prev
+
+@contextmanager
 def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
     "Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8), and `bias` (B, dim) to those of every position."
     if prefix is None and bias is None: yield model; return
     P = 0 if prefix is None else prefix.shape[1]
     if P % BLOCK: raise TreebookError(f"a condition prefix must be a whole number of branch blocks (a multiple of 8), got {P}")
-    prev = model.__dict__.get("embed")   # another condition already in place (condition.glimpsing): add to it
-    base = model.embed
-    def embed(idx, start: int = 0):
-        x = base(idx, start)
+    def add(x, idx, start):
         if bias is not None: x = x + bias[:, None]  # one vector for the whole sequence (broadcast over a batch of samples)
         k = min(P - start, idx.shape[1])
         if k <= 0: return x
         pre = prefix[:, start:start + k].expand(x.shape[0], -1, -1)
         return torch.cat([x[:, :k] + pre, x[:, k:]], 1)
-    model.embed = embed
-    try: yield model
-    finally:
-        if prev is None: del model.embed
-        else: model.embed = prev
+    with wrap_embed(model, add): yield model
 
 @torch.no_grad()
 def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, bias=None, stages: int = 1,
