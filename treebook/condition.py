@@ -215,7 +215,7 @@ class ConditionalTree(nn.Module):
         f = self.encoder(x, mask)
         bias = None
         if self.broadcast:
-            w = torch.ones(f.shape[:2]) if mask is None else (~mask).float()
+            w = torch.ones(f.shape[:2], device=f.device) if mask is None else (~mask).float()
             bias = self.summary((f * w[..., None]).sum(1) / w.sum(1, keepdim=True).clamp_min(1))
         return self.prompt(f, mask), bias
 
@@ -233,7 +233,8 @@ class ConditionalTree(nn.Module):
         "Cross-entropy of the tree tokens given the condition; `batch` = (x, mask, seqs (B, L))."
         x, mask, seqs = batch
         P = self.prompt.length
-        full = torch.cat([torch.full((seqs.shape[0], P), COND, dtype=torch.long), torch.as_tensor(seqs)], 1)
+        seqs = torch.as_tensor(seqs)
+        full = torch.cat([torch.full((seqs.shape[0], P), COND, dtype=torch.long, device=seqs.device), seqs], 1)
         with self.conditioned(x, mask) as (prefix, bias), condition_prefix(self.decoder, prefix, bias): logits = self.decoder(full[:, :-1])
         target = full[:, 1:].masked_fill(full[:, 1:] >= COND, PAD)
         return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
@@ -270,11 +271,12 @@ class Glimpse(nn.Module):
         """((B, T, dim) features for tokens `idx` (B, T) at positions `start`..., (last x, y, z tokens) (B,) each);
         `carry`: those of the positions before `start` (-1: none yet)."""
         B, T = idx.shape
-        slot = torch.arange(start, start + T) % BLOCK
+        dev = idx.device
+        slot = torch.arange(start, start + T, device=dev) % BLOCK
         value = idx < N_VALUES
-        if carry is None: carry = tuple(torch.full((B,), -1) for _ in range(3))
+        if carry is None: carry = tuple(torch.full((B,), -1, device=dev) for _ in range(3))
         def last(is_axis, before):
-            at = torch.where(is_axis, torch.arange(T).expand(B, T), -1).cummax(1).values
+            at = torch.where(is_axis, torch.arange(T, device=dev).expand(B, T), -1).cummax(1).values
             return torch.where(at >= 0, idx.gather(1, at.clamp_min(0)), before[:, None].expand(B, T))
         lx, ly, lz = (last(value & ((slot == a) | (slot == a + 4)), carry[a]) for a in range(3))
         known = ((lx >= 0) & (lz >= 0) & ((ly >= 0) | (not self.volume)))[..., None]
@@ -286,17 +288,18 @@ class Glimpse(nn.Module):
 
 def stroke_images(x, mask=None) -> torch.Tensor:
     "(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front camera (`sketch_target`)."
-    ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.numpy()
-    return torch.from_numpy(np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.numpy(), ok)]))[:, None]
+    ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.cpu().numpy()
+    pics = np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.cpu().numpy(), ok)])
+    return torch.from_numpy(pics)[:, None].to(x.device)
 
 def point_volumes(x, size: int = 32) -> torch.Tensor:
     "(B, 1, size, size, size) grids (z, y, x) of prepared clouds `x` (B, n, 3): points per voxel of the camera's window (y as wide as x), blurred, at most 1."
     from treebook.scan import WINDOW
     x0, x1, z0, z1 = WINDOW
-    lo, hi = torch.tensor([x0, x0, z0]), torch.tensor([x1, x1, z1])
+    lo, hi = torch.tensor([x0, x0, z0], device=x.device), torch.tensor([x1, x1, z1], device=x.device)
     i = ((x - lo) / (hi - lo) * size).long().clamp(0, size - 1)                                    # (B, n, 3) voxel of each point
     flat = (i[..., 2] * size + i[..., 1]) * size + i[..., 0]
-    g = torch.zeros(x.shape[0], size ** 3).scatter_add_(1, flat, torch.ones(flat.shape)).view(-1, 1, size, size, size)
+    g = torch.zeros(x.shape[0], size ** 3, device=x.device).scatter_add_(1, flat, torch.ones(flat.shape, device=x.device)).view(-1, 1, size, size, size)
     return F.avg_pool3d(g, 3, 1, 1).mul(27 / 4).clamp(max=1.0)
 
 @contextmanager

@@ -24,8 +24,8 @@ from .sampling import TreeGrammar, pick, pick_block
 
 # %% auto #0
 __all__ = ['GROWTH_MODES', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar', 'wrap_embed',
-           'condition_prefix', 'generate', 'fit', 'growth_batch', 'lm_loss', 'extend_context', 'grow_sequence',
-           'stage_picture', 'write_growth', 'complete', 'tree_picture', 'write_trees', 'demo_growth']
+           'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss', 'extend_context',
+           'grow_sequence', 'stage_picture', 'write_growth', 'complete', 'tree_picture', 'write_trees', 'demo_growth']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -256,17 +256,25 @@ def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None,
     return [seqs[i, P0:length[i]].numpy().copy() for i in range(n)]
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #f2096ace
+def on_device(batch, device):
+    "`batch` (a tensor, or tuples, lists and dicts of them; anything else stays as it is) moved to `device`."
+    if torch.is_tensor(batch): return batch.to(device)
+    if isinstance(batch, (tuple, list)): return type(batch)(on_device(b, device) for b in batch)
+    if isinstance(batch, dict): return {k: on_device(v, device) for k, v in batch.items()}
+    return batch
+
 def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e-3, warmup: int = 50, weight_decay: float = 0.1,
         grad_clip: float = 1.0, ckpt_every: int = 25, log_every: int = 5, resume: bool = True, time_limit: float | None = None,
         progress: bool = True, meta: dict | None = None) -> dict:
-    "Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a summary."
+    """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a summary.
+    Batches follow the model to its device: move the model to a GPU first to train there."""
     from treebook.train import lr_at
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
     last, log_path = out / "last.pt", out / "log.csv"
     params = [p for p in model.parameters() if p.requires_grad]
     opt = torch.optim.AdamW([{"params": [p for p in params if p.dim() >= 2], "weight_decay": weight_decay},
                              {"params": [p for p in params if p.dim() < 2], "weight_decay": 0.0}], lr=lr, betas=(0.9, 0.95))
-    step, seconds = 0, 0.0
+    step, seconds, dev = 0, 0.0, next(model.parameters()).device
     if last.exists():
         if not resume: raise TreebookError(f"{out} already holds a run (last.pt): resume it or choose another folder")
         ck = torch.load(last, map_location="cpu", weights_only=True)
@@ -281,7 +289,7 @@ def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e
     while step < steps:
         model.train()
         for g in opt.param_groups: g["lr"] = lr_at(step, steps, lr, warmup)
-        value = loss(model, batch(step))
+        value = loss(model, on_device(batch(step), dev))
         opt.zero_grad(set_to_none=True); value.backward()
         if grad_clip: torch.nn.utils.clip_grad_norm_(params, grad_clip)
         opt.step(); step += 1; running.append(float(value)); bar.update(1); bar.set_postfix(loss=f"{running[-1]:.3f}")

@@ -65,8 +65,8 @@ class ModelConfig:
 # %% ../nbs/04_hourglass.ipynb #cd7d2c96
 class KVCache:
     "Keys and values of one attention layer for the positions decoded so far (room for `capacity`)."
-    def __init__(self, batch, heads, capacity, head_dim, dtype=torch.float32):
-        self.k = torch.zeros(batch, heads, capacity, head_dim, dtype=dtype)
+    def __init__(self, batch, heads, capacity, head_dim, dtype=torch.float32, device=None):
+        self.k = torch.zeros(batch, heads, capacity, head_dim, dtype=dtype, device=device)
         self.v = torch.zeros_like(self.k)
         self.n = 0
 
@@ -76,7 +76,7 @@ class KVCache:
         if n0 + t > self.k.shape[2]: raise TreebookError(f"the cache holds {self.k.shape[2]} positions; cannot add {t} to {n0}")
         self.k[:, :, n0:n0 + t], self.v[:, :, n0:n0 + t] = k, v
         self.n = n0 + t
-        mask = None if t == 1 else torch.ones(t, self.n, dtype=torch.bool).tril(diagonal=n0)
+        mask = None if t == 1 else torch.ones(t, self.n, dtype=torch.bool, device=k.device).tril(diagonal=n0)
         return self.k[:, :, :self.n], self.v[:, :, :self.n], mask
 
 class Attention(nn.Module):
@@ -149,7 +149,7 @@ class TreeTransformer(nn.Module):
 
     def embed(self, idx, start: int = 0):
         "Token + slot + branch embeddings of `idx` (B, T), the first of which sits at position `start`."
-        pos = torch.arange(start, start + idx.shape[1])
+        pos = torch.arange(start, start + idx.shape[1], device=idx.device)
         return self.tok_emb(idx) + self.slot_emb(pos % 8) + self.branch_emb(pos // 8)
 
     def bottleneck(self, x, caches=None):
@@ -204,7 +204,7 @@ class DecodeState:
         if capacity > c.max_len: raise TreebookError(f"capacity {capacity} exceeds the model's max_len {c.max_len}")
         capacity = -(-capacity // c.group) * c.group
         dev, dt = model.tok_emb.weight.device, model.tok_emb.weight.dtype
-        kv = lambda cap: KVCache(batch, c.heads, cap, c.dim // c.heads, dt)
+        kv = lambda cap: KVCache(batch, c.heads, cap, c.dim // c.heads, dt, dev)
         caps = [capacity]
         for k in c.factors: caps.append(caps[-1] // k)
         self.n = 0                                                           # tokens consumed
