@@ -133,8 +133,7 @@ t0 = time.time()
 pair = (model, tok)
 if a.kind == "image": res["eval"] = evaluate_image(pair, test, seed=a.seed, fit=a.fit, candidates=a.candidates)
 elif a.kind == "points":
-    base = load_pretrained(a.baseline) if a.baseline else None
-    res["eval"] = evaluate_points(pair, test, baseline=base, seed=a.seed)
+    res["eval"] = evaluate_points(pair, test, baseline=load_pretrained(a.baseline) if a.baseline else None, seed=a.seed)
 else:
     from treebook.scan import sketch, silhouette
     from treebook.condition import sketch_to_tree, silhouette_scores
