@@ -23,19 +23,23 @@ from treebook.partnet import (LINKAGES, PartNetConfig, TreePartNet, affinity_sco
                               merge_seeds, normalize_points, partnet_loss, partnet_targets, predict_seeds, save_partnet)
 
 
+def scan_job(job):
+    "One labelled scan: dict of points (m, 3), part (m,), junction (m,), species."
+    name, s, n_points = job
+    rng = np.random.default_rng(s)
+    t = grow(name, seed=s, stages=1)[-1]
+    sc = scan(t, n_points=n_points, seed=s, noise=rng.uniform(0, 0.004), outliers=rng.uniform(0, 0.02),
+              missing=int(rng.integers(0, 3)), views=int(rng.integers(2, 5)))
+    chain = branch_chains(t)
+    part = np.where(sc.branch >= 0, chain[np.maximum(sc.branch, 0)], -1)
+    return dict(points=sc.points, part=part.astype(np.int32), junction=sc.junction, species=name)
+
+
 def make_pool(n_per_species: int, seed: int, n_points: int, desc: str):
-    "Raw labelled scans: list of dicts points (m, 3), part (m,), junction (m,)."
-    pool = []
-    jobs = [(name, 1000 * seed + i) for i in range(n_per_species) for name in SPECIES]
-    for name, s in tqdm(jobs, desc=desc):
-        rng = np.random.default_rng(s)
-        t = grow(name, seed=s, stages=1)[-1]
-        sc = scan(t, n_points=n_points, seed=s, noise=rng.uniform(0, 0.004), outliers=rng.uniform(0, 0.02),
-                  missing=int(rng.integers(0, 3)), views=int(rng.integers(2, 5)))
-        chain = branch_chains(t)
-        part = np.where(sc.branch >= 0, chain[np.maximum(sc.branch, 0)], -1)
-        pool.append(dict(points=sc.points, part=part.astype(np.int32), junction=sc.junction, species=name))
-    return pool
+    "Raw labelled scans (`scan_job`), made by one process per core; the same scans whatever the number of cores."
+    from concurrent.futures import ProcessPoolExecutor
+    jobs = [(name, 1000 * seed + i, n_points) for i in range(n_per_species) for name in SPECIES]
+    with ProcessPoolExecutor(os.cpu_count()) as ex: return list(tqdm(ex.map(scan_job, jobs, chunksize=4), total=len(jobs), desc=desc))
 
 
 def load_or_make_pool(path: Path, **kw):
@@ -123,6 +127,8 @@ def main():
     ap.add_argument("--no-pair-term", action="store_true", help="the affinity without the learned pair term (as in the paper)")
     ap.add_argument("--fit-scans", type=int, default=60, help="training scans on which to choose the merging threshold (0: keep 0.5)")
     ap.add_argument("--linkage", default="auto", choices=("auto", *LINKAGES), help="how seeds merge; auto: the better on the --fit-scans (closure with --fit-scans 0)")
+    ap.add_argument("--device", default="cpu", help="where to train: cpu, cuda ... (evaluation runs on the CPU)")
+    ap.add_argument("--train-only", action="store_true", help="train, write the checkpoint in --work and stop; the same command without it evaluates and ships")
     ap.add_argument("--tta", type=int, default=1, help="test-time passes over turned copies of each cloud, averaged (partnet.predict_seeds)")
     a = ap.parse_args()
     if a.tta < 1: ap.error("--tta must be at least 1")
@@ -131,16 +137,25 @@ def main():
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term)
     train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=2 * cfg.n_points, desc="train scans")
     test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=2 * cfg.n_points, desc="test scans")
+    if a.device != "cpu" and not torch.cuda.is_available(): ap.error(f"--device {a.device}: no GPU is visible to PyTorch here")
     torch.manual_seed(a.seed)
-    model = TreePartNet(cfg)
+    model = TreePartNet(cfg).to(a.device)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
+    device = torch.cuda.get_device_name(torch.device(a.device)) if a.device != "cpu" else f"{platform.machine()}, {a.threads} threads (CPU)"
     ck = work / "checkpoint.pt"
-    step, elapsed, log = 0, 0.0, []
+    try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+    except OSError: commit = ""
+    commit = commit or os.environ.get("TREEBOOK_COMMIT", "?")[:7]   # a copy of the tree without its history
+    command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
+    trained_by = dict(command=command, commit=commit)   # what made the checkpoint, kept when another command resumes it
+    step, elapsed, log, train_scans = 0, 0.0, [], len(train)
     if ck.exists():
-        blob = torch.load(ck, weights_only=False)
+        blob = torch.load(ck, map_location="cpu", weights_only=False)
         if PartNetConfig.from_dict(blob["config"]) != cfg: sys.exit(f"{ck} was made with another config; use another --work")
         model.load_state_dict(blob["model"]); opt.load_state_dict(blob["opt"])
         step, elapsed, log = blob["step"], blob["elapsed"], blob["log"]
+        device, train_scans = blob.get("device", device), blob.get("train_scans", len(train))   # where it was trained
+        trained_by = blob.get("trained_by", trained_by)
         print(f"resumed at step {step} ({elapsed / 60:.1f} min)")
     elif a.init:
         src = torch.load(a.init, map_location="cpu", weights_only=False)
@@ -150,7 +165,8 @@ def main():
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
         print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
     def save_checkpoint():
-        blob = dict(model=model.state_dict(), opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log, config=cfg.to_dict())
+        blob = dict(model={k: v.cpu() for k, v in model.state_dict().items()}, opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log,
+                    config=cfg.to_dict(), device=device, train_scans=train_scans, trained_by=trained_by)
         _atomic_write(ck, lambda f: torch.save(blob, f))
     rng = np.random.default_rng([a.seed, step])
     t0 = time.time() - elapsed
@@ -159,6 +175,7 @@ def main():
     while step < a.steps and time.time() - t0 < a.minutes * 60:
         for g in opt.param_groups: g["lr"] = a.lr * (0.1 if time.time() - t0 > 0.8 * a.minutes * 60 else 1.0)
         q, part, junc = batch(train, rng.integers(len(train), size=a.batch), cfg.n_points, seed=step)
+        q, part, junc = q.to(a.device), part.to(a.device), junc.to(a.device)
         out = model(q, seed=int(rng.integers(1 << 30)))
         loss, parts = partnet_loss(out, part, junc, cfg)
         opt.zero_grad(); loss.backward(); opt.step()
@@ -170,6 +187,8 @@ def main():
             save_checkpoint()
     bar.close()
     if not log or log[-1]["step"] != step: save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
+    if a.train_only: print(f"trained {step} steps; evaluate with the same command without --train-only"); return
+    model.cpu()
     minutes = (time.time() - t0) / 60
     fit = {}
     cfg.tta = a.tta  # cfg is model.cfg: what is set here is what the network is evaluated and saved with
@@ -182,12 +201,9 @@ def main():
     at_half = evaluate(outs, 0.5, "closure")  # the paper's merging
     metrics["closure_f1"] = evaluate(outs, cfg.threshold, "closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
     print(json.dumps(metrics, indent=1))
-    try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
-    except OSError: commit = "?"
-    command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
-    meta = dict(steps=step, batch=a.batch, minutes=round(minutes, 1), train_scans=len(train), test_scans=len(test), metrics=metrics,
+    meta = dict(steps=step, batch=a.batch, minutes=round(minutes, 1), train_scans=train_scans, test_scans=len(test), metrics=metrics,
                 threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, threshold_fit=fit, metrics_at_half=at_half, init=a.init,
-                command=command, commit=commit, machine=f"{platform.machine()}, {a.threads} threads", torch=str(torch.__version__))
+                command=command, commit=commit, machine=device, trained_by=trained_by, torch=str(torch.__version__))
     out = Path(a.out)
     save_partnet(model, out, **meta)
     res = Path(a.results) if a.results else root / "results" / f"partnet_train{'_nocos' if a.no_cosine else ''}{'_nofocal' if a.no_focal else ''}.json"
@@ -198,10 +214,10 @@ def main():
 
 - **Model**: `treebook.partnet.TreePartNet` with `PartNetConfig` {json.dumps(cfg.to_dict())}; {sum(p.numel() for p in model.parameters()):,} parameters, {out.stat().st_size / 1e6:.1f} MB.
 - **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {2 * cfg.n_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes a random {cfg.n_points}-point subset, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.
-- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']} (CPU, shared){f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
-- **Command**: `{command}` (commit {commit}).
+- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']}{f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
+- **Command**: `{trained_by['command']}` (commit {trained_by['commit']}){'' if trained_by['command'] == command else f'; evaluated by `{command}` (commit {commit})'}.
 - **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs, after {"the closure" if cfg.linkage == "closure" else "average linkage"}) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
-- **Limits**: trained for {minutes:.0f} minutes on a CPU, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.
+- **Limits**: trained for {minutes:.0f} minutes, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.
 """
         _atomic_write(out.with_suffix(".md"), lambda f: f.write(card.encode()))
     print(f"wrote {out} and {res}")
