@@ -7,6 +7,7 @@
 #   JOB ARGS: the arguments of scripts/train_conditions.py for one run, with --out and --tag, without --steps, --device,
 #   --train-only or --time-limit. OUTDIR receives for each run NAME.pt (model, step, seconds, meta; no optimiser state),
 #   NAME.log.csv and its training record results/conditions_..._TAG.json (NAME: the last part of --out), and log.txt.
+# Set TREEBOOK_COMMIT to the commit being run: the copy of the tree there may carry a stale git history.
 # DEVICE=cpu tries the script on a machine without one.
 # Makes data/elm when it is missing, from the dataset's own seed: the same trees as everywhere else.
 set -euo pipefail

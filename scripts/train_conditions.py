@@ -30,9 +30,10 @@ from treebook.condition import (ConditionalTree, cond_batch, save_conditional, l
 
 root = Path(__file__).resolve().parent.parent
 def commit() -> str:
-    "The checkout's commit; where there is no git history (a copy of the tree), $TREEBOOK_COMMIT."
+    "$TREEBOOK_COMMIT where it is set (a copy of the tree on another machine, whose git history may be stale), else the checkout's."
+    if os.environ.get("TREEBOOK_COMMIT"): return os.environ["TREEBOOK_COMMIT"]
     r = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root)
-    return r.stdout.strip() if r.returncode == 0 else os.environ.get("TREEBOOK_COMMIT", "unknown")
+    return r.stdout.strip() if r.returncode == 0 else "unknown"
 p = argparse.ArgumentParser()
 p.add_argument("--kind", required=True, choices=("image", "sketch", "points")); p.add_argument("--order", default="dfs", choices=("dfs", "bfs"))
 p.add_argument("--out", required=True); p.add_argument("--data", default="data/elm"); p.add_argument("--init", default=None)
@@ -125,7 +126,7 @@ res = {"command": "python scripts/train_conditions.py " + " ".join(sys.argv[1:])
        "commit": commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
-       "run": {"step": ck["step"], "steps_planned": a.steps, "seconds": ck["seconds"], "n_params": sum(q.numel() for q in model.parameters()),
+       "run": {"step": ck["step"], "steps_planned": a.steps if not a.eval_only else None, "seconds": ck["seconds"], "n_params": sum(q.numel() for q in model.parameters()),
                **meta, **ck.get("meta", {}), "decoder": vars(dec.config)}}
 with torch.no_grad(): res["held_out_loss"] = float(np.mean([float(model.loss(cond_batch(a.kind, test, tok, k, 8, a.seed + 7, a.order, False)))
                                                             for k in range(4)]))
@@ -167,6 +168,8 @@ if a.eval_only and (root / "results" / f"{base}.json").exists():   # keep the co
     res["train_command"] = old.get("train_command", old.get("command"))
     res["train_commit"] = old.get("train_commit", old.get("commit"))
     res["train_machine"] = old.get("train_machine", old.get("machine"))
+    import re   # the steps the training planned (its --steps)
+    res["run"]["steps_planned"] = int(m.group(1)) if (m := re.search(r"--steps (\d+)", res["train_command"] or "")) else None
 image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"{name}.png")
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
@@ -183,10 +186,10 @@ if a.ship:
 
 - **Data**: the first {len(train)} training trees of the `elm` dataset (`data/elm`), turned about z and mirrored, then {'photographed by `scan.silhouette` (front camera, 224 px, read at 112 px)' if a.kind == 'image' else 'sketched by `scan.sketch` (2D segments)' if a.kind == 'sketch' else 'sampled (200 points of the branch surfaces)'}; sequences in {a.order.upper()} order.
 - **Model**: {a.kind} encoder ({'small CNN from scratch' if a.kind == 'image' else 'per-element MLP + one self-attention layer'}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix){' and a pooled summary added to every token' if model.broadcast else ''}{'; the glimpse (a second small CNN over the ' + {'image': 'silhouette', 'sketch': 'strokes drawn by the front camera', 'points': 'points counted into a 32^3 voxel grid, in 3D'}[a.kind] + ', sampled where each token draws, `condition.Glimpse`)' if model.glimpse is not None else ''}, hourglass decoder arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}; {res['run']['n_params']:,} parameters; {('started from the conditional model `' + a.from_ + '` as it was at commit ' + res.get('train_commit', res['commit'])[:7]) if a.from_ else ('decoder started from `' + str(a.init) + '`') if a.init else 'decoder trained from scratch'}.
-- **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {a.steps} planned steps in {ck['seconds'] / 60:.0f} minutes on {ck.get('meta', {}).get('device') or str(a.threads) + ' thread(s) of a 2-core CPU'}.
-- **Command**: `{res.get('train_command', res['command'])}`{'; evaluated and shipped by `' + res['command'] + '`' if 'train_command' in res else ''}; commit {res['commit']}.
+- **Training**: AdamW, peak lr {a.lr}, {a.warmup} warm-up steps then cosine, batch {a.batch}; {ck['step']} of {res['run']['steps_planned'] or a.steps} planned steps in {ck['seconds'] / 60:.1f} minutes on {ck.get('meta', {}).get('device') or str(a.threads) + ' thread(s) of a 2-core CPU'}.
+- **Command**: `{res.get('train_command', res['command'])}` (commit {res.get('train_commit', res['commit'])[:7]}){'; evaluated and shipped by `' + res['command'] + '` (commit ' + res['commit'][:7] + ')' if 'train_command' in res else ''}.
 - **Metrics** on {a.n_eval} held-out trees (`results/{name}.json`): held-out loss {res['held_out_loss']:.3f}; {ev}.
-- **Limits**: a tiny, briefly trained model; the numbers are far from the paper's and are stored to be beaten.
+- **Limits**: a small model, trained for minutes on procedural elms of one species only; inputs unlike them (photographs, other species, other cameras) are outside what it has seen.
 """
     (WEIGHTS / f"elm-{a.kind}.md").write_text(card)
     print("shipped", target)

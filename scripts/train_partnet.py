@@ -137,15 +137,15 @@ def main():
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term)
     train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=2 * cfg.n_points, desc="train scans")
     test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=2 * cfg.n_points, desc="test scans")
-    if a.device != "cpu" and not torch.cuda.is_available(): ap.error(f"--device {a.device}: no GPU is visible to PyTorch here")
+    gpu = a.device != "cpu" and torch.cuda.is_available()   # without one, a finished GPU run can still be evaluated here
     torch.manual_seed(a.seed)
-    model = TreePartNet(cfg).to(a.device)
+    model = TreePartNet(cfg).to(a.device if gpu else "cpu")
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
-    device = torch.cuda.get_device_name(torch.device(a.device)) if a.device != "cpu" else f"{platform.machine()}, {a.threads} threads (CPU)"
+    device = torch.cuda.get_device_name(torch.device(a.device)) if gpu else f"{platform.machine()}, {a.threads} threads (CPU)"
     ck = work / "checkpoint.pt"
     try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
     except OSError: commit = ""
-    commit = commit or os.environ.get("TREEBOOK_COMMIT", "?")[:7]   # a copy of the tree without its history
+    commit = os.environ.get("TREEBOOK_COMMIT", "")[:7] or commit or "?"   # set where a copy of the tree has a stale history
     command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
     trained_by = dict(command=command, commit=commit)   # what made the checkpoint, kept when another command resumes it
     step, elapsed, log, train_scans = 0, 0.0, [], len(train)
@@ -168,6 +168,8 @@ def main():
         blob = dict(model={k: v.cpu() for k, v in model.state_dict().items()}, opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log,
                     config=cfg.to_dict(), device=device, train_scans=train_scans, trained_by=trained_by)
         _atomic_write(ck, lambda f: torch.save(blob, f))
+    if a.device != "cpu" and not gpu and step < a.steps and elapsed < a.minutes * 60:
+        ap.error(f"--device {a.device}: no GPU is visible to PyTorch here, and the run in {work} has steps left")
     rng = np.random.default_rng([a.seed, step])
     t0 = time.time() - elapsed
     bar = tqdm(total=a.steps, initial=step, desc="train")
@@ -175,7 +177,7 @@ def main():
     while step < a.steps and time.time() - t0 < a.minutes * 60:
         for g in opt.param_groups: g["lr"] = a.lr * (0.1 if time.time() - t0 > 0.8 * a.minutes * 60 else 1.0)
         q, part, junc = batch(train, rng.integers(len(train), size=a.batch), cfg.n_points, seed=step)
-        q, part, junc = q.to(a.device), part.to(a.device), junc.to(a.device)
+        q, part, junc = q.to(a.device), part.to(a.device), junc.to(a.device)  # (a GPU: checked above)
         out = model(q, seed=int(rng.integers(1 << 30)))
         loss, parts = partnet_loss(out, part, junc, cfg)
         opt.zero_grad(); loss.backward(); opt.step()
