@@ -33,7 +33,6 @@ main_args() {
   echo "$n: $pace s a step with all jobs running: $(python -c "print(int($left / $pace * 0.95))") steps in $left s" >&2
   echo "--device ${DEVICE:-cuda} --steps $(python -c "print(int($left / $pace * 0.95))") --time-limit $left --train-only"
 }
-for job in "${jobs[@]}"; do main_args "$job" 2>> "$log" >/dev/null; done
 run_all main_args 2>> "$log"
 for job in "${jobs[@]}"; do o=$(out_of "$job"); n=$(basename "$o")
   python -c "import torch; c=torch.load('$o/last.pt', map_location='cpu', weights_only=True); c.pop('opt'); torch.save(c, '$dest/$n.pt')"

@@ -10,7 +10,7 @@ Usage (resumable: run the same command again after a kill):
     python scripts/train_conditions.py --kind image ... --eval-only --fit --candidates 4   (the network, then fitted to the
         silhouette and best of 4 by IoU: rows "image/dfs+fit+best4", results/conditions_image_dfs_fit_best4.json)
     python scripts/train_conditions.py ... --device cuda --workers 12 --train-only   (train on a GPU, batches made by 12
-        processes; --train-only writes the training record, results/conditions_<kind>_<order>[_glimpse].json, and stops:
+        processes; --train-only writes the training record, results/conditions_<kind>_<order>[_glimpse][_<tag>].json, and stops:
         evaluate afterwards with --eval-only, on any machine, from the same --out)
 
 Data: the training trees of data/elm, turned and mirrored, then photographed (`scan.silhouette`), sketched (`scan.sketch`) or
@@ -18,7 +18,7 @@ sampled (200 surface points); held-out: the first --n-eval test trees. The decod
 unconditional model) or from scratch (--dim ...). Writes results/conditions_<kind>_<order>.json and merges the row into
 results/conditions.json ("table").
 """
-import argparse, json, os, platform, shutil, subprocess, sys, time
+import argparse, json, os, platform, re, shutil, subprocess, sys, time
 from pathlib import Path
 import numpy as np, torch
 from treebook.datasets import load_trees
@@ -168,8 +168,7 @@ if a.eval_only and (root / "results" / f"{base}.json").exists():   # keep the co
     res["train_command"] = old.get("train_command", old.get("command"))
     res["train_commit"] = old.get("train_commit", old.get("commit"))
     res["train_machine"] = old.get("train_machine", old.get("machine"))
-    import re   # the steps the training planned (its --steps)
-    res["run"]["steps_planned"] = int(m.group(1)) if (m := re.search(r"--steps (\d+)", res["train_command"] or "")) else None
+    res["run"]["steps_planned"] = int(m.group(1)) if (m := re.search(r"--steps (\d+)", res["train_command"] or "")) else None   # the training's --steps
 image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"{name}.png")
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
