@@ -278,7 +278,8 @@ class Glimpse(nn.Module):
         def last(is_axis, before):
             at = torch.where(is_axis, torch.arange(T, device=dev).expand(B, T), -1).cummax(1).values
             return torch.where(at >= 0, idx.gather(1, at.clamp_min(0)), before[:, None].expand(B, T))
-        lx, ly, lz = (last(value & ((slot == a) | (slot == a + 4)), carry[a]) for a in range(3))
+        lx, lz = (last(value & ((slot == a) | (slot == a + 4)), carry[a]) for a in (0, 2))
+        ly = last(value & ((slot == 1) | (slot == 5)), carry[1]) if self.volume else carry[1][:, None]   # y: only a volume looks at depth
         known = ((lx >= 0) & (lz >= 0) & ((ly >= 0) | (not self.volume)))[..., None]
         axes = (self.gx[lx.clamp_min(0)], self.gy[ly.clamp_min(0)], self.gz[lz.clamp_min(0)]) if self.volume else (self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)])
         grid = torch.stack(axes, -1).view(B, T, *[1] * (len(axes) - 1), len(axes))   # (B, T, 1, 2) or (B, T, 1, 1, 3)
