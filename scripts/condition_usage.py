@@ -9,7 +9,7 @@ import argparse, json, os, platform, subprocess, sys, time
 from pathlib import Path
 import numpy as np, torch
 from treebook.datasets import load_trees
-from treebook.condition import load_conditional, cond_batch
+from treebook.condition import load_conditional, cond_batch, input_reliance
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
@@ -21,12 +21,9 @@ test = load_trees(root / a.data, "test")[:50]
 rows = {}
 for name in a.models.split(","):
     model, tok = load_conditional(name)
-    matched, shuffled = [], []
-    with torch.no_grad():
-        for k in range(a.batches):   # the batches of train_conditions.py's held-out loss (seed + 7, no augmentation)
-            x, mask, seqs = cond_batch(model.kind, test, tok, k, 8, a.seed, "dfs", False)
-            matched.append(float(model.loss((x, mask, seqs))))
-            shuffled.append(float(model.loss((torch.roll(x, 1, 0), None if mask is None else torch.roll(mask, 1, 0), seqs))))
+    # the batches of train_conditions.py's held-out loss (seed + 7, no augmentation)
+    r = [input_reliance(model, cond_batch(model.kind, test, tok, k, 8, a.seed, "dfs", False)) for k in range(a.batches)]
+    matched, shuffled = [x["own"] for x in r], [x["other"] for x in r]
     rows[name] = {"kind": model.kind, "matched": float(np.mean(matched)), "shuffled": float(np.mean(shuffled)),
                   "gain_nats_per_token": float(np.mean(shuffled) - np.mean(matched))}
     print(name, rows[name], flush=True)

@@ -18,7 +18,7 @@ sampled (200 surface points); held-out: the first --n-eval test trees. The decod
 unconditional model) or from scratch (--dim ...). Writes results/conditions_<kind>_<order>.json and merges the row into
 results/conditions.json ("table").
 """
-import argparse, json, os, platform, re, shutil, subprocess, sys, time
+import argparse, json, os, platform, re, sys, time
 from pathlib import Path
 import numpy as np, torch
 from treebook.datasets import load_trees
@@ -26,14 +26,10 @@ from treebook.tokens import Tokenizer
 from treebook.hourglass import ModelConfig, TreeTransformer
 from treebook.train import WEIGHTS, load_pretrained
 from treebook.growth import extend_context, fit
+from provenance import commit   # scripts/provenance.py
 from treebook.condition import (ConditionalTree, cond_batch, save_conditional, load_conditional, evaluate_image, evaluate_points, N_QUERIES)
 
 root = Path(__file__).resolve().parent.parent
-def commit() -> str:
-    "$TREEBOOK_COMMIT where it is set (a copy of the tree on another machine, whose git history may be stale), else the checkout's."
-    if os.environ.get("TREEBOOK_COMMIT"): return os.environ["TREEBOOK_COMMIT"]
-    r = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root)
-    return r.stdout.strip() if r.returncode == 0 else "unknown"
 p = argparse.ArgumentParser()
 p.add_argument("--kind", required=True, choices=("image", "sketch", "points")); p.add_argument("--order", default="dfs", choices=("dfs", "bfs"))
 p.add_argument("--out", required=True); p.add_argument("--data", default="data/elm"); p.add_argument("--init", default=None)

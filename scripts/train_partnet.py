@@ -6,7 +6,7 @@ The pool of labelled scans (grown trees of all species, scanned with noise, outl
 --work; checkpoints (model, optimiser, step, random state) are written there atomically every --every steps, so killing
 and re-running the same command goes on where it stopped. Training stops at --steps or after --minutes of wall time.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from dataclasses import replace
 from pathlib import Path
 
@@ -16,6 +16,7 @@ from tqdm.auto import tqdm
 
 root = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(root))
+import provenance   # scripts/provenance.py, beside this script
 from treebook.tree import _atomic_write
 from treebook.botany import SPECIES, grow
 from treebook.scan import scan
@@ -143,9 +144,7 @@ def main():
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
     device = torch.cuda.get_device_name(torch.device(a.device)) if gpu else f"{platform.machine()}, {a.threads} threads (CPU)"
     ck = work / "checkpoint.pt"
-    try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
-    except OSError: commit = ""
-    commit = os.environ.get("TREEBOOK_COMMIT", "")[:7] or commit or "?"   # set where a copy of the tree has a stale history
+    commit = provenance.commit(short=True)
     command = "python scripts/train_partnet.py " + " ".join(sys.argv[1:])
     trained_by = dict(command=command, commit=commit)   # what made the checkpoint, kept when another command resumes it
     step, elapsed, log, train_scans = 0, 0.0, [], len(train)

@@ -172,25 +172,13 @@ def test_widgets_headless(toy):
     assert g.tree != s3 and len(g.history) == 10
 
 
-def test_shipped_image_model_reads_the_silhouette():
-    "The shipped elm-image (with the glimpse) predicts a tree's tokens better from its own silhouette than from another tree's."
-    from treebook.condition import cond_batch
-    model, tok = load_conditional("elm-image")
-    assert model.glimpse is not None
-    trees = [grow("elm", seed=900 + s)[-1] for s in range(4)]
-    with torch.no_grad():
-        x, mask, seqs = cond_batch("image", trees, tok, 0, 4, 0, "dfs", False)
-        own, other = float(model.loss((x, mask, seqs))), float(model.loss((torch.roll(x, 1, 0), mask, seqs)))
-    assert other - own > 0.02, (own, other)   # nats per token; the first image model, without the glimpse, showed 0.002
 
-
-def test_shipped_points_model_reads_its_points():
-    "The shipped elm-points (3D glimpse, trained on a GPU) predicts a tree's tokens better from its own points than from another tree's."
-    from treebook.condition import cond_batch
-    model, tok = load_conditional("elm-points")
-    assert model.glimpse is not None and model.glimpse.volume
+@pytest.mark.parametrize("name, before", [("elm-image", 0.002), ("elm-points", 0.0001)])
+def test_shipped_model_reads_its_input(name, before):
+    "The shipped elm-image (2D glimpse) and elm-points (3D glimpse) predict a tree's tokens better from its own input than from another tree's."
+    from treebook.condition import cond_batch, input_reliance
+    model, tok = load_conditional(name)
+    assert model.glimpse is not None and model.glimpse.volume == (model.kind == "points")
     trees = [grow("elm", seed=900 + s)[-1] for s in range(4)]
-    with torch.no_grad():
-        x, mask, seqs = cond_batch("points", trees, tok, 0, 4, 0, "dfs", False)
-        own, other = float(model.loss((x, mask, seqs))), float(model.loss((torch.roll(x, 1, 0), mask, seqs)))
-    assert other - own > 0.02, (own, other)   # nats per token; the first points model, without the glimpse, showed < 0.0001
+    r = input_reliance(model, cond_batch(model.kind, trees, tok, 0, 4, 0, "dfs", False))
+    assert r["gap"] > 0.02, r   # nats per token; the models before the glimpse showed at most `before`

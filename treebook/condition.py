@@ -26,9 +26,9 @@ from .growth import condition_prefix, extend_context, fit, generate, wrap_embed
 __all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
            'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target', 'points_input',
            'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_volumes', 'glimpsing', 'condition_of',
-           'cond_batch', 'save_conditional', 'load_conditional', 'sample_conditional', 'image_to_tree',
-           'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image', 'evaluate_points',
-           'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
+           'cond_batch', 'input_reliance', 'save_conditional', 'load_conditional', 'sample_conditional',
+           'image_to_tree', 'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image',
+           'evaluate_points', 'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -335,6 +335,16 @@ def cond_batch(kind: str, trees, tok: Tokenizer, step: int, batch_size: int = 8,
     ts = [augment(trees[i], seed, step, int(i)) if augment_data else trees[i] for i in idx]
     x, mask = _batch_cond(kind, [condition_of(kind, t, seed + step) for t in ts])
     return x, mask, torch.from_numpy(tok.encode_batch(ts, order))
+
+# %% ../nbs/10a_condition.ipynb #987dbe2a
+@torch.no_grad()
+def input_reliance(model: ConditionalTree, batch) -> dict:
+    """Loss of `batch` = (x, mask, seqs) with each tree's own condition and with another's (the conditions rolled by one):
+    {'own', 'other', 'gap'} in nats per token; a model that ignores its input has gap 0."""
+    x, mask, seqs = batch
+    own = float(model.loss((x, mask, seqs)))
+    other = float(model.loss((torch.roll(x, 1, 0), None if mask is None else torch.roll(mask, 1, 0), seqs)))
+    return {"own": own, "other": other, "gap": other - own}
 
 # %% ../nbs/10a_condition.ipynb #c05f3463
 COND_VERSION = 1
