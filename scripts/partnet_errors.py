@@ -1,6 +1,6 @@
 """Where does the shipped TreePartNet's affinity go wrong? An error analysis on the held-out scans of train_partnet.py.
 
-Usage: python scripts/partnet_errors.py [--work tmp/partnet5] [--refine]   (needs the scan pools that train_partnet.py cached in --work)
+Usage: python scripts/partnet_errors.py [--work tmp/partnet5] [--refine] [--weights W --out results/X.json]   (needs the scan pools that train_partnet.py cached in --work)
 
 For each held-out scan: the network's seed affinities (the shipped tta and threshold), the true part of each seed (the part of
 the seed point itself, as in training and in the F1 of the notebook), and the majority part of the points the network
@@ -12,23 +12,26 @@ With --refine: a gradient-boosted classifier (scikit-learn) on per-pair features
 principal axes of the two clusters, junction scores, shared neighbours), fitted on training scans, scored on the held-out ones.
 Writes results/partnet_errors.json.
 """
-import argparse, json, subprocess, sys, time
+import argparse, json, sys, time
 from pathlib import Path
 import numpy as np, torch
 
 root = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(root)); sys.path.insert(0, str(root / "scripts"))
+import provenance
 from train_partnet import load_or_make_pool, seed_outputs
 from treebook.partnet import load_partnet, affinity_scores
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("--work", default=str(root / "tmp" / "partnet5")); ap.add_argument("--threads", type=int, default=2)
 ap.add_argument("--refine", action="store_true"); ap.add_argument("--refine-scans", type=int, default=300)
+ap.add_argument("--weights", default=None, help="TreePartNet weights to analyse (default: the shipped ones)")
+ap.add_argument("--out", default=str(root / "results" / "partnet_errors.json"), help="where to write the record")
 a = ap.parse_args()
 torch.set_num_threads(a.threads)
 work = Path(a.work)
 if not (work / "test_pool.npz").exists(): sys.exit(f"no scan pools in {work}: run scripts/train_partnet.py with --work {work} first")
-model = load_partnet(); n, th = model.cfg.n_points, model.cfg.threshold
+model = load_partnet(a.weights); n, th = model.cfg.n_points, model.cfg.threshold
 
 
 def majority(o):
@@ -56,7 +59,7 @@ for o in outs:
     mx = (maj[i] != sp[i]) | (maj[j] != sp[j])
     fp += int((p & ~y).sum()); fn += int((~p & y).sum()); fp_mixed += int((p & ~y & mx).sum()); fn_mixed += int((~p & y & mx).sum())
 res = {"command": "python scripts/partnet_errors.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip(),
+       "commit": provenance.commit(short=True), "weights": a.weights or "shipped", "junction_seeds": model.cfg.junction_seeds,
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "scans": len(outs), "threshold": th, "tta": model.cfg.tta,
        "affinity_f1": float(np.mean(net)), "mixed_seed_share": float(np.mean(mixed)), "majority_oracle_f1": float(np.mean(oracle)),
        "false_positives": fp, "false_positives_with_mixed_seed": fp_mixed, "false_negatives": fn, "false_negatives_with_mixed_seed": fn_mixed}
@@ -103,6 +106,6 @@ if a.refine:
             rows.append(affinity_scores(P, o["seed_part"], t, pairs=o["pairs"])["f1"])
         f1[str(t)] = float(np.mean(rows))
     res["refined_f1"] = f1; res["refine_scans"] = len(tr)
-(root / "results").mkdir(exist_ok=True)
-(root / "results" / "partnet_errors.json").write_text(json.dumps(res, indent=1))
+Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+Path(a.out).write_text(json.dumps(res, indent=1))
 print(json.dumps(res, indent=1))

@@ -96,6 +96,7 @@ class PartNetConfig:
     threshold: float = 0.5
     linkage: str = "closure"   # how `segment` merges seeds: "closure" (the paper) or "average" (see merge_seeds)
     tta: int = 1               # passes of `segment` over turned copies of the cloud, averaged (see predict_seeds)
+    junction_seeds: bool = False  # seeds only on points that a first pass does not call junctions (see TreePartNet.seed_candidates)
     def to_dict(self) -> dict: return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
     @classmethod
     def from_dict(cls, d: dict) -> "PartNetConfig":
@@ -156,9 +157,15 @@ class TreePartNet(nn.Module):
         if self.cfg.pair_term: logit = logit + self.pair_logits(e, seed_xyz, _nearest_seeds(seed_xyz, self.cfg.pair_neighbours) if nb is None else nb)
         return logit
 
-    def forward(self, xyz, seed: int | None = None) -> dict:
-        "Logits for points `xyz` (B, N, 3) in the unit sphere."
-        sx, si, sf, pf = self.backbone(xyz, seed=seed)
+    @torch.no_grad()
+    def seed_candidates(self, xyz, seed: int | None = None):
+        "(B, N) bool, the points of `xyz` that may be seeds: with `cfg.junction_seeds` those a first pass does not call junctions; None (all) without."
+        if not self.cfg.junction_seeds: return None
+        return self(xyz, seed=seed)["junction"] < 0
+
+    def forward(self, xyz, seed: int | None = None, seed_mask=None) -> dict:
+        "Logits for points `xyz` (B, N, 3) in the unit sphere; seeds only on the points of `seed_mask` (B, N) if given."
+        sx, si, sf, pf = self.backbone(xyz, seed=seed, mask=seed_mask)
         k = min(self.cfg.k_seeds, sx.shape[1])
         knn = torch.cdist(xyz, sx).topk(k, dim=-1, largest=False).indices  # (B, N, k), nearest first
         fine = self.fine(pf[:, :, None] - gather(sf, knn))[..., 0]
@@ -255,9 +262,11 @@ def predict_seeds(model: TreePartNet, q, seed: int = 0, tta: int = 1) -> dict:
     x = torch.as_tensor(np.asarray(q, np.float32))[None]
     model.eval()
     first, prob, fine, junction, passes = None, 0, 0, 0, 0
+    torch.manual_seed(seed)
+    mask = model.seed_candidates(x, seed=seed)  # the same seed points in every pass
     for r in range(tta):
         torch.manual_seed(seed)
-        out = model(_turn(x, r, tta) if r else x, seed=seed)
+        out = model(_turn(x, r, tta) if r else x, seed=seed, seed_mask=mask)
         if first is None: first = out
         elif not (torch.equal(out["seed_idx"], first["seed_idx"]) and torch.equal(out["knn"], first["knn"])): continue  # a tie broke differently
         prob = prob + torch.sigmoid(out["affinity"][0]); fine = fine + out["fine"][0]; junction = junction + out["junction"][0]

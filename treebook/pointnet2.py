@@ -16,14 +16,22 @@ __all__ = ['farthest_point_sample', 'gather', 'ball_query', 'group', 'mlp', 'Set
            'PointNet2']
 
 # %% ../nbs/09_pointnet2.ipynb #c870ec5b
-def farthest_point_sample(xyz: torch.Tensor, npoint: int, seed: int | None = None) -> torch.Tensor:
-    "(B, npoint) indices of `npoint` farthest-point samples of `xyz` (B, N, 3); the first is point 0, or random with `seed`."
+def farthest_point_sample(xyz: torch.Tensor, npoint: int, seed: int | None = None, mask: torch.Tensor | None = None) -> torch.Tensor:
+    """(B, npoint) indices of `npoint` farthest-point samples of `xyz` (B, N, 3); the first is point 0, or random with `seed`.
+    `mask` (B, N) bool: only these points may be samples (a row with fewer than `npoint` of them samples from all its points)."""
     B, N, _ = xyz.shape
     if not 1 <= npoint <= N: raise TreebookError(f"cannot sample {npoint} points from a cloud of {N}")
     idx = torch.zeros(B, npoint, dtype=torch.long, device=xyz.device)
     dist = torch.full((B, N), float("inf"), device=xyz.device, dtype=xyz.dtype)
-    if seed is None: far = torch.zeros(B, dtype=torch.long, device=xyz.device)
-    else: far = torch.randint(0, N, (B,), generator=torch.Generator().manual_seed(seed)).to(xyz.device)
+    if mask is None:
+        if seed is None: far = torch.zeros(B, dtype=torch.long, device=xyz.device)
+        else: far = torch.randint(0, N, (B,), generator=torch.Generator().manual_seed(seed)).to(xyz.device)
+    else:
+        if tuple(mask.shape) != (B, N): raise TreebookError(f"mask must have shape {(B, N)}, got {tuple(mask.shape)}")
+        mask = torch.where(mask.sum(1, keepdim=True) >= npoint, mask.to(device=xyz.device, dtype=torch.bool), True)
+        dist = dist.masked_fill(~mask, -1.0)  # below every true distance: never the farthest, never lowered by the minimum
+        r = torch.rand(B, N, generator=torch.Generator().manual_seed(seed)).to(xyz.device) if seed is not None else -torch.arange(N, dtype=xyz.dtype, device=xyz.device).expand(B, N)
+        far = torch.where(mask, r, -float("inf")).argmax(-1)  # a random allowed point, or the first one
     rows = torch.arange(B, device=xyz.device)
     for i in range(npoint):
         idx[:, i] = far
@@ -73,14 +81,14 @@ class SetAbstraction(nn.Module):
         self.mlps = nn.ModuleList(mlp([in_ch + 3] + list(m)) for m in mlps)
         self.out_ch = sum(m[-1] for m in mlps)
 
-    def forward(self, xyz, features=None, seed: int | None = None):
-        "(centres (B, S, 3), features (B, S, out_ch), centre indices (B, S))."
+    def forward(self, xyz, features=None, seed: int | None = None, mask=None):
+        "(centres (B, S, 3), features (B, S, out_ch), centre indices (B, S)); `mask` (B, N): the points that may be centres."
         if self.npoint is None:
             centres = xyz.mean(1, keepdim=True)
             g = xyz[:, None] - centres[:, :, None]
             g = torch.cat([g, features[:, None]], -1) if features is not None else g
             return centres, self.mlps[0](g).max(2).values, None
-        idx = farthest_point_sample(xyz, self.npoint, seed)
+        idx = farthest_point_sample(xyz, self.npoint, seed, mask)
         centres = gather(xyz, idx)
         outs = [m(group(xyz, centres, features, r, k)).max(2).values for r, k, m in zip(self.radii, self.nsamples, self.mlps)]
         return centres, torch.cat(outs, -1), idx
@@ -120,8 +128,9 @@ class PointNet2(nn.Module):
         self.fp1 = FeaturePropagation(2 * w + in_ch, [2 * w, 2 * w])
         self.out_ch = 2 * w
 
-    def forward(self, xyz, features=None, seed: int | None = None):
-        x1, f1, i1 = self.sa1(xyz, features, seed)
+    def forward(self, xyz, features=None, seed: int | None = None, mask=None):
+        "`mask` (B, N) bool: the points that may be seeds (all if None)."
+        x1, f1, i1 = self.sa1(xyz, features, seed, mask)
         x2, f2, _ = self.sa2(x1, f1, seed)
         x3, f3, _ = self.sa3(x2, f2)
         f2 = self.fp3(x2, x3, f2, f3)
