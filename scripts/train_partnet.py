@@ -21,7 +21,7 @@ from treebook.tree import _atomic_write
 from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.partnet import (LINKAGES, PartNetConfig, TreePartNet, affinity_scores, augment, branch_chains, cluster_scores, merge_scores,
-                              merge_seeds, normalize_points, partnet_loss, partnet_targets, predict_seeds, save_partnet)
+                              merge_seeds, normalize_points, partnet_loss, partnet_targets, point_pair_scores, predict_seeds, save_partnet)
 
 
 def scan_job(job):
@@ -85,15 +85,17 @@ def seed_outputs(model, pool, n, seed=12345) -> list:
 
 
 def evaluate(outs, threshold, linkage):
-    "Mean RI, NMI, merging precision/recall/F1, junction accuracy over `seed_outputs`, merging at `threshold` by `linkage`."
+    "Mean RI, NMI, merging precision/recall/F1 (seed pairs and point pairs), junction accuracy over `seed_outputs`, merging at `threshold` by `linkage`."
     th, rows = threshold, []
     for o in outs:
         sb, sp = merge_seeds(o["prob"], th, linkage=linkage, pairs=o["pairs"]), o["seed_part"]
         af = affinity_scores(o["prob"], sp, th, pairs=o["pairs"])  # the network's own decisions
         cs, fs, ms = cluster_scores(sb[o["fine"]], o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
+        pps = point_pair_scores(sb[o["fine"]], o["part"])  # over the points: does not depend on where the seeds sit
         rows.append(dict(ri=cs["ri"], nmi=cs["nmi"], clusters=cs["clusters"], true_parts=int(len(np.unique(sp[sp >= 0]))),
                          fine_ri=fs["ri"], fine_nmi=fs["nmi"], precision=ms["precision"], recall=ms["recall"], f1=ms["f1"],
-                         aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], junction_acc=o["junction_acc"]))
+                         aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], point_precision=pps["precision"], point_recall=pps["recall"], point_f1=pps["f1"],
+                         junction_acc=o["junction_acc"]))
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
 
 
@@ -220,7 +222,7 @@ def main():
 - **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {2 * cfg.n_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes a random {cfg.n_points}-point subset, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.{" Seeds: only on points that a first pass of the network does not call junctions (`junction_seeds`), in training and in use." if cfg.junction_seeds else ""}
 - **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']}{f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
 - **Command**: `{trained_by['command']}` (commit {trained_by['commit']}){'' if trained_by['command'] == command else f'; evaluated by `{command}` (commit {commit})'}.
-- **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs, after {"the closure" if cfg.linkage == "closure" else "average linkage"}) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
+- **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs, after {"the closure" if cfg.linkage == "closure" else "average linkage"}) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; point pairs in one branch (each point with its fine cluster's seed; independent of where the seeds sit) precision {metrics['point_precision']:.3f} / recall {metrics['point_recall']:.3f} / F1 {metrics['point_f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
 - **Limits**: trained for {minutes:.0f} minutes, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.
 """
         _atomic_write(out.with_suffix(".md"), lambda f: f.write(card.encode()))

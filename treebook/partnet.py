@@ -24,8 +24,8 @@ from .pointnet2 import PointNet2, gather, mlp
 # %% auto #0
 __all__ = ['LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example',
            'PartNetConfig', 'neighbour_pairs', 'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss',
-           'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores', 'cluster_scores',
-           'affinity_scores', 'som_clusters']
+           'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores',
+           'point_pair_scores', 'cluster_scores', 'affinity_scores', 'som_clusters']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -329,6 +329,17 @@ def merge_scores(pred_seed_branch, true_seed_part) -> dict:
     "Precision, recall, F1 of the seed pairs put in one branch, against the true parts (outlier seeds, part -1, ignored)."
     p = np.asarray(pred_seed_branch)
     return affinity_scores((p[:, None] == p[None]).astype(float), true_seed_part)  # "one branch" is an affinity of 1
+
+def point_pair_scores(pred, true) -> dict:
+    "Precision, recall, F1 of the *point* pairs put in one branch by labels `pred`, against `true` (points with true label -1 ignored)."
+    p, t = np.asarray(pred).ravel(), np.asarray(true).ravel()
+    if p.shape != t.shape: raise TreebookError(f"pred and true must have the same length, got {p.shape} and {t.shape}")
+    ok = t >= 0; p, t = p[ok], t[ok]
+    pairs = lambda n: float((n * (n - 1) / 2).sum())              # pairs within groups of sizes n
+    _, both = np.unique(np.stack([t, p]), axis=1, return_counts=True)
+    tp, pp, tt = pairs(both), pairs(np.unique(p, return_counts=True)[1]), pairs(np.unique(t, return_counts=True)[1])
+    prec = tp / pp if pp else 1.0; rec = tp / tt if tt else 1.0
+    return dict(precision=prec, recall=rec, f1=2 * prec * rec / max(prec + rec, 1e-12))
 
 def cluster_scores(pred, true) -> dict:
     "Rand index and NMI of labels `pred` against `true` (points with true label -1 ignored); needs scikit-learn."
