@@ -10,7 +10,7 @@ false positives and false negatives involve one, and the affinity F1 of an oracl
 the two clusters' majority parts agree (a bound on what any rule reading the clusters' points can reach against these labels).
 With --refine: a gradient-boosted classifier (scikit-learn) on per-pair features (the network's affinity, distances,
 principal axes of the two clusters, junction scores, shared neighbours), fitted on training scans, scored on the held-out ones.
-Writes results/partnet_errors.json.
+Writes results/partnet_errors.json (or --out); --weights analyses other weights than the shipped ones.
 """
 import argparse, json, sys, time
 from pathlib import Path
