@@ -3,8 +3,10 @@
 Usage: python benchmarks/botany.py [--n-elm 10000] [--workers 2] [--stats-n 40] [--out results/botany.json]
 Writes results/botany.json (with the command, git commit and machine) and results/botany_distributions.png.
 """
-import argparse, json, os, platform, shutil, subprocess, sys, tempfile, time
+import argparse, json, os, platform, shutil, sys, tempfile, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 import numpy as np
 
@@ -31,7 +33,7 @@ def main():
     ap.add_argument("--out", default="results/botany.json")
     a = ap.parse_args()
     root = Path(__file__).resolve().parents[1]
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+    commit = provenance.commit()
     res = {"command": "python " + " ".join(sys.argv), "commit": commit, "machine": machine(), "time": time.strftime("%Y-%m-%d %H:%M:%S")}
 
     # growth, one process: seconds per tree for every species at its preset cap

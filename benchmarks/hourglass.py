@@ -18,6 +18,8 @@ allocations, hence RSS.
 """
 import argparse, gc, json, os, platform, resource, subprocess, sys, threading, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGE = os.sysconf("SC_PAGE_SIZE")
@@ -106,8 +108,7 @@ def sampling(args):
 
 
 def git_commit():
-    try: return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=ROOT).stdout.strip()
-    except OSError: return "unknown"
+    return provenance.commit()
 
 
 def machine():

@@ -4,8 +4,10 @@ Usage: python benchmarks/metrics.py [--n 1000] [--points 2048]
 Writes results/metrics_bench.json. Trees: procedural elms from treebook.botany (two disjoint seed ranges).
 Goal (issue 6): 1,000 vs 1,000 trees in at most 5 minutes on 2 cores.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 import numpy as np
 
@@ -50,7 +52,7 @@ if args.check:
         d, i, cert = nearest(Gc, Rc, k, kd=(kg, kr))
         check["by_k"][k] = {"same_nearest": float((i == ex.argmin(1)).mean()), "max_abs_error": float(np.abs(d - ex.min(1)).max()), "certified": cert}
 
-commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+commit = provenance.commit()
 res = {"command": "python benchmarks/metrics.py " + " ".join(sys.argv[1:]), "commit": commit,
        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "processor": platform.processor(),
                    "load_avg_1min_at_end": os.getloadavg()[0]},

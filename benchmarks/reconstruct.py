@@ -10,6 +10,8 @@ everything else is kept; the run is recorded under "updates" with its command an
 """
 import argparse, json, os, platform, resource, subprocess, sys, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -182,8 +184,7 @@ def main():
     if "real" not in skip: res["real_scans"] = real_scans(a.weights, methods); print(json.dumps(res["real_scans"], indent=0))
     if "skeletons" not in skip: res["skeletons"] = skeletons(a.weights, methods, a.trees_per_species); print(json.dumps(res["skeletons"]["summary"]))
     if "clustering" not in skip and "partnet" in methods: res["clustering"] = clustering(a.weights, a.cluster_scans, rows); print(json.dumps(res["clustering"]))
-    try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
-    except OSError: commit = "?"
+    commit = provenance.commit(short=True)
     meta = dict(command="python benchmarks/reconstruct.py " + " ".join(sys.argv[1:]), commit=commit,
                 machine=f"{platform.machine()}, {os.cpu_count()} cores (shared with other jobs), {platform.python_version()}")
     if a.merge and Path(a.out).exists(): res = merged(json.loads(Path(a.out).read_text()), res, meta)

@@ -3,8 +3,10 @@
 Usage: python benchmarks/sample.py [--n 16] [--repeats 3]
 Writes results/sample.json (command, commit, machine, seconds per repeat, best and median).
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 import numpy as np, torch
 from treebook.train import sample_trees, load_pretrained
 
@@ -17,7 +19,7 @@ for r in range(a.repeats):
     t = time.time(); trees = sample_trees(a.n, model=model, seed=r); times.append(time.time() - t)
     branches.append(float(np.mean([x.n for x in trees])))
 res = {"command": "python benchmarks/sample.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": torch.get_num_threads(), "torch": torch.__version__,
                    "load_average": os.getloadavg()},

@@ -5,8 +5,10 @@ Writes results/tokens.json (with the command, git commit and machine).
 Trees: `--base` elms grown by treebook.botany (max 200 branches; example_tree(6) cut to 200 if botany is missing),
 each turned about z to `trees / base` angles (turning keeps the canonical frame).
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 import numpy as np
 
@@ -96,7 +98,7 @@ def main():
         table[name] = errors(Tokenizer.fit(train, **kw), test)
         print(f"{name:22s} " + "  ".join(f"{k} {v:.3g}" for k, v in table[name].items()))
 
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+    commit = provenance.commit()
     res = {"command": "python " + " ".join(sys.argv), "commit": commit, "machine": machine(), "time": time.strftime("%Y-%m-%d %H:%M:%S"),
            "trees": len(trees), "source": source, "base_trees": a.base, "turns": turns, "branches_mean": float(n.mean()),
            "branches_max": int(n.max()), "sequence_length": length, "timing": timing,

@@ -4,8 +4,10 @@ Usage: python benchmarks/wavelet.py [--scan PATH] [--grids 128 256] [--repeats 3
        python benchmarks/wavelet.py --gallery [--gallery-scans tree13.xyz tree1.xyz]
          -> results/wavelet_similarity.json (Chamfer distances, normalised by height) and results/wavelet_gallery.png
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
 
 import numpy as np
 import pywt
@@ -70,7 +72,7 @@ def main():
     ap.add_argument("--gallery", action="store_true", help="write the similarity figures and the mesh gallery instead of timing")
     ap.add_argument("--gallery-scans", nargs="+", default=["tree13.xyz", "tree1.xyz"])
     a = ap.parse_args()
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
+    commit = provenance.commit()
     if a.gallery: return gallery(a, commit)
     infer_grammar(a.scan, grid=64)   # warm imports and caches
     runs = []

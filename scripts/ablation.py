@@ -10,6 +10,7 @@ capped at 48 branches, so that a sequence is 400 tokens and nine runs fit in an 
 """
 import argparse, json, os, platform, resource, subprocess, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np
 
 root = Path(__file__).resolve().parent.parent
@@ -87,7 +88,7 @@ def main():
             subprocess.run([sys.executable, __file__, *passthrough, "--_one", order, arch, str(lr)], check=True)
         results[(order, arch, lr)] = json.loads((out / "result.json").read_text())
     meta = {"command": "python scripts/ablation.py " + " ".join(sys.argv[1:]),
-            "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+            "commit": provenance.commit(),
             "time": time.strftime("%Y-%m-%d %H:%M:%S"),
             "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads_per_run": a.threads,
                         "note": "2 CPU cores shared with other jobs (the shipped model trained at the same time): times are comparable within a table only roughly"},

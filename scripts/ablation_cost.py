@@ -8,6 +8,7 @@ steps minus the resident set before the first. Writes results/ablation_cost.json
 """
 import argparse, json, os, platform, resource, subprocess, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.hourglass import ARCHS, ModelConfig, TreeTransformer
 
@@ -38,7 +39,7 @@ def main():
     a = p.parse_args(); torch.set_num_threads(a.threads)
     if a._mem: return memory(*a._mem)
     out = {"command": "python scripts/ablation_cost.py " + " ".join(sys.argv[1:]),
-           "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+           "commit": provenance.commit(),
            "time": time.strftime("%Y-%m-%d %H:%M:%S"),
            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "load_average": os.getloadavg(),
                        "note": "2 CPU cores shared with other jobs; round-robin timing spreads their load over all architectures"},

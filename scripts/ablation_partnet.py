@@ -8,6 +8,7 @@ writes results/partnet_ablation.json: per variant the held-out affinity and merg
 """
 import argparse, json, subprocess, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 
 root = Path(__file__).resolve().parent.parent
 VARIANTS = {"full": [], "no cosine": ["--no-cosine"], "no focal": ["--no-focal"], "neither": ["--no-cosine", "--no-focal"]}
@@ -31,8 +32,7 @@ def main():
             subprocess.run(cmd, check=True)
         r = json.loads(rec.read_text())
         rows[name] = dict(steps=r["steps"], minutes=r["minutes"], **r["metrics"])
-    try: commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True).stdout.strip()
-    except OSError: commit = "?"
+    commit = provenance.commit(short=True)
     out = root / "results" / "partnet_ablation.json"
     out.write_text(json.dumps(dict(command="python scripts/ablation_partnet.py " + " ".join(sys.argv[1:]), commit=commit,
                                    time=time.strftime("%Y-%m-%d %H:%M:%S"), width=a.width, batch=a.batch, rows=rows), indent=1))

@@ -5,8 +5,9 @@ input does worse with the wrong one; equal losses mean the condition is ignored.
 Usage: python scripts/condition_usage.py [--models elm-image,elm-sketch,elm-points] [--batches 4] [--threads 2]
 Writes results/condition_usage.json.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.datasets import load_trees
 from treebook.condition import load_conditional, cond_batch, input_reliance
@@ -28,7 +29,7 @@ for name in a.models.split(","):
                   "gain_nats_per_token": float(np.mean(shuffled) - np.mean(matched))}
     print(name, rows[name], flush=True)
 res = {"command": " ".join(["python scripts/condition_usage.py", *sys.argv[1:]]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads},
        "batches_of_8": a.batches, "rows": rows}
 (root / "results").mkdir(exist_ok=True)

@@ -7,8 +7,9 @@ Adds the row "unconditional/<name>[+fit][+bestK]" to results/conditions.json and
 With --fit each sample is fitted to the held-out silhouette (condition.fit_silhouette); with --candidates K the best of K
 samples by silhouette IoU is kept: the same steps `image_to_tree(fit=..., candidates=...)` takes after the image model.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.datasets import load_trees
 from treebook.scan import silhouette
@@ -34,7 +35,7 @@ for i, t in enumerate(test):   # the same seeds as evaluate_image: sample i uses
 ev = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 meta = torch.load(a.model, weights_only=True).get("meta", {}) if Path(a.model).suffix == ".pt" else {}
 res = {"command": "python scripts/eval_unconditional_silhouettes.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "model": a.model, "model_step": meta.get("step"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
        "eval": ev}

@@ -4,8 +4,9 @@ Usage: python scripts/figures_completion.py [--model elm | PATH.pt] [--n 4] [--s
 Writes results/completion.png (one row per tree: the given part, then the completions; given branches brown, new green)
 and results/completion.json (command, commit, model, per tree: prompt kept exactly, completions pairwise distinct, sizes).
 """
-import argparse, json, subprocess, sys, tempfile, time
+import argparse, json, sys, tempfile, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from PIL import Image
 from treebook.botany import grow
@@ -42,7 +43,7 @@ fig = Image.new("RGB", (w, h), "white"); y = 0
 for i in pics: fig.paste(i, (0, y)); y += i.height
 fig.save(root / "results" / "completion.png")
 res = {"command": "python scripts/figures_completion.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "model": a.model, "model_meta": meta, "seconds": time.time() - t0, "trees": rows,
        "all_prompts_kept": all(r["prompt_kept_exactly"] for r in rows), "all_distinct": all(r["pairwise_distinct"] for r in rows)}
 (root / "results" / "completion.json").write_text(json.dumps(res, indent=1))

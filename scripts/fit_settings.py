@@ -5,8 +5,9 @@ silhouettes the image models are scored on are not used.
 Usage: python scripts/fit_settings.py [--n 40] [--seed 0]
 Writes results/fit_settings.json.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np
 from tqdm.auto import tqdm
 from treebook.datasets import load_trees
@@ -40,7 +41,7 @@ for name, kw in tqdm(settings.items(), desc="settings"):
         iou.append(silhouette_scores(silhouette(g), target)["iou"]); b.append(bend(g))
     rows[name] = {"iou": float(np.mean(iou)), "bend_degrees": float(np.mean(b)), "kwargs": kw}
 res = {"command": " ".join(["python scripts/fit_settings.py", *sys.argv[1:]]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},
        "pairs": a.n, "rows": rows}
 (root / "results").mkdir(exist_ok=True)

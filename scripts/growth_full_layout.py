@@ -5,8 +5,9 @@ A tiny hourglass (from scratch) learns growth sequences of elms grown to at most
 sequences and measure containment (share of stage-k branches found again, within one bin, in stage k+1), against the
 procedural histories (1.0) and against unrelated stages (a chance level). Writes results/growth_full.json.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.botany import grow
 from treebook.tokens import Tokenizer
@@ -39,7 +40,7 @@ seqs = generate(net, a.samples, tok=tok, stages=10, mode="full", temperature=0.9
 samples = [decode_growth(tok, s, mode="full") for s in seqs]
 mixed = [[held[(j + k) % len(held)][k] for k in range(10)] for j in range(len(held))]   # stage k of another tree: chance level
 res = {"command": "python scripts/growth_full_layout.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
        "run": r | {"n_params": net.n_params, "max_len": net.config.max_len, "trees": a.trees, "max_branches": a.branches},

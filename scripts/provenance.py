@@ -2,11 +2,23 @@
 import os, subprocess
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parent.parent
+OUTPUTS = ("results", "treebook/data/weights")   # what the scripts themselves write: changes there do not make a run's code differ
+
+
+def _git(*args) -> str:
+    try: return subprocess.run(["git", *args], capture_output=True, text=True, cwd=ROOT).stdout.strip()
+    except OSError: return ""
+
+
 def commit(short: bool = False) -> str:
     """$TREEBOOK_COMMIT where it is set (a copy of the tree on another machine, whose git history may be stale, as on the
-    lent GPU machines), else the checkout's HEAD; "unknown" without either."""
+    lent GPU machines), else the checkout's HEAD, with "+modified" when tracked files other than the outputs (results/,
+    the shipped weights) differ from it: the run's code was not exactly that commit. "unknown" without either."""
     c = os.environ.get("TREEBOOK_COMMIT", "")
-    if not c:
-        try: c = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=Path(__file__).resolve().parent).stdout.strip()
-        except OSError: c = ""
-    return (c[:7] if short else c) or "unknown"
+    if c: return c[:7] if short else c
+    c = _git("rev-parse", "HEAD")
+    if not c: return "unknown"
+    c = c[:7] if short else c
+    if _git("status", "--porcelain", "--untracked-files=no", "--", ".", *(f":!{p}" for p in OUTPUTS)): c += "+modified"
+    return c

@@ -3,8 +3,9 @@
 Usage: python scripts/ship_elm.py --run runs/elm --data data/elm [--n-samples 1000] [--no-ship]
 Writes results/elm_eval.json (command, commit, machine, metrics) and, unless --no-ship, treebook/data/weights/elm.{pt,tok.json,md}.
 """
-import argparse, json, os, platform, shutil, subprocess, sys, time
+import argparse, json, os, platform, shutil, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.datasets import load_trees, load_manifest
 from treebook.hourglass import TreeTransformer
@@ -46,7 +47,7 @@ def main():
     test, train = load_trees(a.data, "test"), load_trees(a.data, "train")
     if a.limit: test, train = test[:a.limit], train[:a.limit]  # a smoke test only
     res = {"command": "python scripts/ship_elm.py " + " ".join(sys.argv[1:]),
-           "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+           "commit": provenance.commit(),
            "time": time.strftime("%Y-%m-%d %H:%M:%S"),
            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
            "run": {"best_step": ck["step"], "last_step": state["step"], "train_seconds": state.get("seconds"), "args": state["args"],

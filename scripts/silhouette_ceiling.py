@@ -5,8 +5,9 @@ held-out silhouette in hand (an oracle no model has), and of the best of k rando
 Usage: python scripts/silhouette_ceiling.py [--pool 3000] [--n-eval 50] [--seed 0]
 Writes results/silhouette_ceiling.json.
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np
 from tqdm.auto import tqdm
 from treebook.datasets import load_trees
@@ -27,7 +28,7 @@ inter = T @ S.T
 iou = inter / (T.sum(1)[:, None] + S.sum(1)[None] - inter)
 ks = [k for k in (1, 4, 16, 64) if k <= len(idx)]
 res = {"command": " ".join(["python scripts/silhouette_ceiling.py", *sys.argv[1:]]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": {"platform": platform.platform(), "cpus": os.cpu_count()},
        "n_eval": len(test), "pool": len(idx),
        "iou_random_pair": float(iou.mean()),

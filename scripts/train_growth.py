@@ -9,8 +9,9 @@ regrown with stages=10), the incremental layout of `treebook.growth.encode_growt
 (an unconditional checkpoint, its tokenizer beside it) with room for the nine [STAGE] blocks, or from scratch (--dim ...).
 Writes results/growth.json (command, commit, machine, steps, losses, containment, stage statistics).
 """
-import argparse, json, os, platform, shutil, subprocess, sys, time
+import argparse, json, os, platform, shutil, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.tree import Tree
 from treebook.botany import grow
@@ -74,7 +75,7 @@ net.load_state_dict(ck["model"]); net.eval()
 
 # 3. evaluation: held-out loss, growth samples (containment, stages, branches per stage), a filmstrip
 res = {"command": "python scripts/train_growth.py " + " ".join(sys.argv[1:]),
-       "commit": subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip(),
+       "commit": provenance.commit(),
        "time": time.strftime("%Y-%m-%d %H:%M:%S"),
        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "torch": torch.__version__},
        "run": {"step": ck["step"], "steps_planned": a.steps, "seconds": ck["seconds"], "n_params": net.n_params, **meta,

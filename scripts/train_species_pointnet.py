@@ -3,8 +3,9 @@
 Usage: python scripts/train_species_pointnet.py [--per-species 150] [--epochs 30]
 Writes treebook/data/weights/species_pointnet.pt and results/species_pointnet.json (command, commit, machine, accuracy).
 """
-import argparse, json, os, platform, subprocess, sys, time
+import argparse, json, os, platform, sys, time
 from pathlib import Path
+import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from tqdm.auto import tqdm
 from treebook.botany import SPECIES, grow_tree, species
@@ -32,7 +33,7 @@ te, tr = perm[:n_test], perm[n_test:]
 t1 = time.time()
 net = train_species_pointnet(clouds[tr], labels[tr], names, epochs=a.epochs, seed=a.seed)
 with torch.no_grad(): acc = float((net(torch.from_numpy(clouds[te])).argmax(1).numpy() == labels[te]).mean())
-commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=root).stdout.strip()
+commit = provenance.commit()
 cmd = "python scripts/train_species_pointnet.py " + " ".join(sys.argv[1:])
 out = root / "treebook" / "data" / "weights" / "species_pointnet.pt"
 save_species_pointnet(net, out, accuracy=acc, command=cmd, commit=commit)

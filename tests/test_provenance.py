@@ -1,0 +1,42 @@
+"The commit that scripts/provenance.py writes into results/ and model cards."
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance
+
+
+def fake_git(head: str, status: str):
+    return lambda *args: head if args[0] == "rev-parse" else status
+
+
+def test_environment_wins(monkeypatch):
+    monkeypatch.setenv("TREEBOOK_COMMIT", "0123456789abcdef")
+    monkeypatch.setattr(provenance, "_git", fake_git("ffffffffffff", " M nbs/00_tree.ipynb"))
+    assert provenance.commit() == "0123456789abcdef" and provenance.commit(short=True) == "0123456"
+
+
+@pytest.mark.parametrize("status, suffix", [("", ""), (" M nbs/09a_partnet.ipynb", "+modified")])
+def test_head_and_modified(monkeypatch, status, suffix):
+    monkeypatch.delenv("TREEBOOK_COMMIT", raising=False)
+    monkeypatch.setattr(provenance, "_git", fake_git("abcdef0123456789", status))
+    assert provenance.commit(short=True) == "abcdef0" + suffix
+    assert provenance.commit() == "abcdef0123456789" + suffix
+
+
+def test_no_git(monkeypatch):
+    monkeypatch.delenv("TREEBOOK_COMMIT", raising=False)
+    monkeypatch.setattr(provenance, "_git", lambda *args: "")
+    assert provenance.commit() == "unknown"
+
+
+def test_outputs_do_not_count(monkeypatch):
+    "The status query leaves out results/ and the shipped weights, which the scripts write themselves."
+    monkeypatch.delenv("TREEBOOK_COMMIT", raising=False)
+    seen = []
+    monkeypatch.setattr(provenance, "_git", lambda *args: seen.append(args) or ("abc1234" if args[0] == "rev-parse" else ""))
+    provenance.commit()
+    status = [a for a in seen if a[0] == "status"][0]
+    assert ":!results" in status and ":!treebook/data/weights" in status
