@@ -107,10 +107,6 @@ def sampling(args):
     return res
 
 
-def git_commit():
-    return provenance.commit()
-
-
 def machine():
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.processor())
     mem = next((l.split()[1] for l in open("/proc/meminfo") if l.startswith("MemTotal")), "0")
@@ -173,7 +169,7 @@ def main():
         pt, fu = get("pt", L, B), get("full", L, B)
         ratios.append(dict(length=L, batch=B, speedup_median=pt["time_median_s"] / fu["time_median_s"],
                            speedup_min=pt["time_min_s"] / fu["time_min_s"], memory_ratio=pt["peak_mb"] / fu["peak_mb"]))
-    res = dict(command=" ".join(["python"] + sys.argv), commit=git_commit(), machine=machine(), torch=torch.__version__,
+    res = dict(command=" ".join(["python"] + sys.argv), commit=provenance.commit(), machine=machine(), torch=torch.__version__,
                threads=a.threads, started=time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(t_start)),
                loadavg_start=load0, config=dict(dim=a.dim, depth=a.depth, heads=a.heads),
                memory_method=__doc__.split("Memory: ", 1)[1].strip(), train=train, ratios=ratios)

@@ -90,8 +90,9 @@ def evaluate(outs, threshold, linkage):
     for o in outs:
         sb, sp = merge_seeds(o["prob"], th, linkage=linkage, pairs=o["pairs"]), o["seed_part"]
         af = affinity_scores(o["prob"], sp, th, pairs=o["pairs"])  # the network's own decisions
-        cs, fs, ms = cluster_scores(sb[o["fine"]], o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
-        pps = point_pair_scores(sb[o["fine"]], o["part"])  # over the points: does not depend on where the seeds sit
+        branch = sb[o["fine"]]  # the branch of each point: that of its fine cluster's seed
+        cs, fs, ms = cluster_scores(branch, o["part"]), cluster_scores(o["fine"], o["part"]), merge_scores(sb, sp)
+        pps = point_pair_scores(branch, o["part"])  # over the points: does not depend on where the seeds sit
         rows.append(dict(ri=cs["ri"], nmi=cs["nmi"], clusters=cs["clusters"], true_parts=int(len(np.unique(sp[sp >= 0]))),
                          fine_ri=fs["ri"], fine_nmi=fs["nmi"], precision=ms["precision"], recall=ms["recall"], f1=ms["f1"],
                          aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], point_precision=pps["precision"], point_recall=pps["recall"], point_f1=pps["f1"],

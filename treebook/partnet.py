@@ -332,13 +332,13 @@ def merge_scores(pred_seed_branch, true_seed_part) -> dict:
 
 def point_pair_scores(pred, true) -> dict:
     "Precision, recall, F1 of the *point* pairs put in one branch by labels `pred`, against `true` (points with true label -1 ignored)."
+    try: from sklearn.metrics.cluster import pair_confusion_matrix
+    except ImportError: raise TreebookError("point-pair scores need scikit-learn: pip install scikit-learn") from None
     p, t = np.asarray(pred).ravel(), np.asarray(true).ravel()
     if p.shape != t.shape: raise TreebookError(f"pred and true must have the same length, got {p.shape} and {t.shape}")
-    ok = t >= 0; p, t = p[ok], t[ok]
-    pairs = lambda n: float((n * (n - 1) / 2).sum())              # pairs within groups of sizes n
-    _, both = np.unique(np.stack([t, p]), axis=1, return_counts=True)
-    tp, pp, tt = pairs(both), pairs(np.unique(p, return_counts=True)[1]), pairs(np.unique(t, return_counts=True)[1])
-    prec = tp / pp if pp else 1.0; rec = tp / tt if tt else 1.0
+    ok = t >= 0
+    (_, fp), (fn, tp) = pair_confusion_matrix(t[ok], p[ok])   # counts of (ordered) point pairs: rows true, columns predicted
+    prec = float(tp / (tp + fp)) if tp + fp else 1.0; rec = float(tp / (tp + fn)) if tp + fn else 1.0
     return dict(precision=prec, recall=rec, f1=2 * prec * rec / max(prec + rec, 1e-12))
 
 def cluster_scores(pred, true) -> dict:
