@@ -126,7 +126,8 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--width", type=int, default=PartNetConfig.width, help="channels of the PointNet++ backbone")
     ap.add_argument("--results", default=None, help="where to write the training record (default results/partnet_train*.json)")
-    ap.add_argument("--points", type=int, default=PartNetConfig.n_points, help="points per training scan")
+    ap.add_argument("--points", type=int, default=PartNetConfig.n_points, help="points the network takes per cloud (a random subset of each scan)")
+    ap.add_argument("--pool-points", type=int, default=None, help="points per scan in the pools (default twice --points)")
     ap.add_argument("--init", default=None, help="start from these weights (same sizes); layers they lack start fresh")
     ap.add_argument("--no-pair-term", action="store_true", help="the affinity without the learned pair term (as in the paper)")
     ap.add_argument("--fit-scans", type=int, default=60, help="training scans on which to choose the merging threshold (0: keep 0.5)")
@@ -141,8 +142,10 @@ def main():
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term,
                         junction_seeds=a.junction_seeds)
-    train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=2 * cfg.n_points, desc="train scans")
-    test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=2 * cfg.n_points, desc="test scans")
+    pool_points = a.pool_points or 2 * cfg.n_points
+    if pool_points < cfg.n_points: ap.error(f"--pool-points {pool_points} is fewer than --points {cfg.n_points}")
+    train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=pool_points, desc="train scans")
+    test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=pool_points, desc="test scans")
     gpu = a.device != "cpu" and torch.cuda.is_available()   # without one, a finished GPU run can still be evaluated here
     torch.manual_seed(a.seed)
     model = TreePartNet(cfg).to(a.device if gpu else "cpu")
@@ -164,7 +167,7 @@ def main():
     elif a.init:
         src = torch.load(a.init, map_location="cpu", weights_only=False)
         theirs = PartNetConfig.from_dict(src["config"])
-        if replace(theirs, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
+        if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
         print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
@@ -220,7 +223,7 @@ def main():
         card = f"""# TreePartNet weights (`partnet.pt`)
 
 - **Model**: `treebook.partnet.TreePartNet` with `PartNetConfig` {json.dumps(cfg.to_dict())}; {sum(p.numel() for p in model.parameters()):,} parameters, {out.stat().st_size / 1e6:.1f} MB.
-- **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {2 * cfg.n_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes a random {cfg.n_points}-point subset, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.{" Seeds: only on points that a first pass of the network does not call junctions (`junction_seeds`), in training and in use." if cfg.junction_seeds else ""}
+- **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {pool_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes {'all ' + str(cfg.n_points) + ' points, shuffled' if pool_points == cfg.n_points else 'a random ' + str(cfg.n_points) + '-point subset'}, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.{" Seeds: only on points that a first pass of the network does not call junctions (`junction_seeds`), in training and in use." if cfg.junction_seeds else ""}
 - **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']}{f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
 - **Command**: `{trained_by['command']}` (commit {trained_by['commit']}){'' if trained_by['command'] == command else f'; evaluated by `{command}` (commit {commit})'}.
 - **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs, after {"the closure" if cfg.linkage == "closure" else "average linkage"}) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; point pairs in one branch (each point with its fine cluster's seed; independent of where the seeds sit) precision {metrics['point_precision']:.3f} / recall {metrics['point_recall']:.3f} / F1 {metrics['point_f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
