@@ -21,7 +21,7 @@ from treebook.tree import _atomic_write
 from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.partnet import (LINKAGES, PartNetConfig, TreePartNet, affinity_scores, augment, branch_chains, cluster_scores, merge_scores,
-                              merge_seeds, normalize_points, partnet_loss, partnet_targets, point_pair_scores, predict_seeds, save_partnet)
+                              merge_seeds, normalize_points, partnet_loss, point_pair_scores, predict_seeds, save_partnet)
 
 
 def scan_job(job):
@@ -47,6 +47,9 @@ def load_or_make_pool(path: Path, **kw):
     if path.exists():
         with np.load(path, allow_pickle=False) as z:  # read each array once: every z[...] reads the whole array again
             P, T, J, off, species = (z[k] for k in ("points", "part", "junction", "offsets", "species"))
+        want = kw.get("n_points")  # a cached pool must hold what the command asks for (callers that only read it pass nothing)
+        if want and len(off) > 1 and not np.all(np.diff(off) == want):
+            sys.exit(f"{path} holds scans of {sorted(set(np.diff(off).tolist()))} points, not {want}: use another --work or --pool-points")
         return [dict(points=P[a:b], part=T[a:b], junction=J[a:b], species=str(sp)) for a, b, sp in zip(off[:-1], off[1:], species)]
     pool = make_pool(**kw)
     off = np.concatenate([[0], np.cumsum([len(p["points"]) for p in pool])])
@@ -139,11 +142,11 @@ def main():
     a = ap.parse_args()
     if a.tta < 1: ap.error("--tta must be at least 1")
     torch.set_num_threads(a.threads)
-    work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term,
                         junction_seeds=a.junction_seeds)
     pool_points = a.pool_points or 2 * cfg.n_points
     if pool_points < cfg.n_points: ap.error(f"--pool-points {pool_points} is fewer than --points {cfg.n_points}")
+    work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=pool_points, desc="train scans")
     test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=pool_points, desc="test scans")
     gpu = a.device != "cpu" and torch.cuda.is_available()   # without one, a finished GPU run can still be evaluated here
