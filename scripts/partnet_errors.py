@@ -8,6 +8,8 @@ assigns to the seed (its fine cluster). A seed whose own part differs from its c
 two branches meet, and its label says one branch while its points say another. Reported: the share of mixed seeds, how many
 false positives and false negatives involve one, and the affinity F1 of an oracle that calls a pair "one branch" exactly when
 the two clusters' majority parts agree (a bound on what any rule reading the clusters' points can reach against these labels).
+It also splits the scored pairs by the number of seeds on the smaller of the two parts (1, 2, 3 or more), with the errors
+and the pooled precision, recall and F1 of each group, and gives the share of seeds that are alone on their part.
 With --refine: a gradient-boosted classifier (scikit-learn) on per-pair features (the network's affinity, distances,
 principal axes of the two clusters, junction scores, shared neighbours), fitted on training scans, scored on the held-out ones.
 Writes results/partnet_errors.json (or --out); --weights analyses other weights than the shipped ones.
@@ -45,6 +47,8 @@ def majority(o):
 test = load_or_make_pool(work / "test_pool.npz")
 outs = seed_outputs(model, test, n)   # exactly train_partnet.py's evaluation of the held-out scans
 mixed, oracle, net, fp, fn, fp_mixed, fn_mixed = [], [], [], 0, 0, 0, 0
+SIZES = ("1", "2", "3+")   # the seeds of the smaller part of a pair: a part of one seed can only have negative pairs
+by_size, lone = {k: dict(pairs=0, tp=0, fp=0, fn=0) for k in SIZES}, []
 for o in outs:
     sp, maj = o["seed_part"], majority(o)
     ok = sp >= 0
@@ -58,11 +62,21 @@ for o in outs:
     y, p = sp[i] == sp[j], a_[i, j] > th
     mx = (maj[i] != sp[i]) | (maj[j] != sp[j])
     fp += int((p & ~y).sum()); fn += int((~p & y).sum()); fp_mixed += int((p & ~y & mx).sum()); fn_mixed += int((~p & y & mx).sum())
+    _, inv, cnt = np.unique(sp, return_inverse=True, return_counts=True)
+    seeds_of_part = cnt[inv.ravel()]
+    lone.append(float(np.mean(seeds_of_part[ok] == 1)))
+    small = np.minimum(seeds_of_part[i], seeds_of_part[j])
+    for k, sel in zip(SIZES, (small == 1, small == 2, small >= 3)):
+        d = by_size[k]; d["pairs"] += int(sel.sum()); d["tp"] += int((p & y & sel).sum()); d["fp"] += int((p & ~y & sel).sum()); d["fn"] += int((~p & y & sel).sum())
+for d in by_size.values():
+    pr, rc = d["tp"] / max(d["tp"] + d["fp"], 1), d["tp"] / max(d["tp"] + d["fn"], 1)
+    d.update(precision=pr, recall=rc, f1=2 * pr * rc / max(pr + rc, 1e-12))   # pooled over the scans
 res = {"command": "python scripts/partnet_errors.py " + " ".join(sys.argv[1:]),
        "commit": provenance.commit(short=True), "weights": a.weights or "shipped", "junction_seeds": model.cfg.junction_seeds,
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "scans": len(outs), "threshold": th, "tta": model.cfg.tta,
        "affinity_f1": float(np.mean(net)), "mixed_seed_share": float(np.mean(mixed)), "majority_oracle_f1": float(np.mean(oracle)),
-       "false_positives": fp, "false_positives_with_mixed_seed": fp_mixed, "false_negatives": fn, "false_negatives_with_mixed_seed": fn_mixed}
+       "false_positives": fp, "false_positives_with_mixed_seed": fp_mixed, "false_negatives": fn, "false_negatives_with_mixed_seed": fn_mixed,
+       "lone_seed_share": float(np.mean(lone)), "by_smaller_part_seeds": by_size}
 
 
 def pair_features(o):
