@@ -8,8 +8,8 @@ assigns to the seed (its fine cluster). A seed whose own part differs from its c
 two branches meet, and its label says one branch while its points say another. Reported: the share of mixed seeds, how many
 false positives and false negatives involve one, and the affinity F1 of an oracle that calls a pair "one branch" exactly when
 the two clusters' majority parts agree (a bound on what any rule reading the clusters' points can reach against these labels).
-It also splits the scored pairs by the number of seeds on the smaller of the two parts (1, 2, 3 or more), with the errors
-and the pooled precision, recall and F1 of each group, and gives the share of seeds that are alone on their part.
+It also splits the scored pairs by the number of seeds on the smaller of the two parts (1, 2, 3 or more, and all), with the
+errors and the pooled precision, recall and F1 of each group, and gives the share of seeds that are alone on their part.
 With --refine: a gradient-boosted classifier (scikit-learn) on per-pair features (the network's affinity, distances,
 principal axes of the two clusters, junction scores, shared neighbours), fitted on training scans, scored on the held-out ones.
 Writes results/partnet_errors.json (or --out); --weights analyses other weights than the shipped ones.
@@ -68,9 +68,10 @@ for o in outs:
     small = np.minimum(seeds_of_part[i], seeds_of_part[j])
     for k, sel in zip(SIZES, (small == 1, small == 2, small >= 3)):
         d = by_size[k]; d["pairs"] += int(sel.sum()); d["tp"] += int((p & y & sel).sum()); d["fp"] += int((p & ~y & sel).sum()); d["fn"] += int((~p & y & sel).sum())
-for d in by_size.values():
+by_size["all"] = {c: sum(d[c] for d in by_size.values()) for c in ("pairs", "tp", "fp", "fn")}
+for d in by_size.values():   # pooled over the scans (the records' affinity_f1 is the mean over the scans)
     pr, rc = d["tp"] / max(d["tp"] + d["fp"], 1), d["tp"] / max(d["tp"] + d["fn"], 1)
-    d.update(precision=pr, recall=rc, f1=2 * pr * rc / max(pr + rc, 1e-12))   # pooled over the scans
+    d.update(precision=pr, recall=rc, f1=2 * pr * rc / max(pr + rc, 1e-12))
 res = {"command": "python scripts/partnet_errors.py " + " ".join(sys.argv[1:]),
        "commit": provenance.commit(short=True), "weights": a.weights or "shipped", "junction_seeds": model.cfg.junction_seeds,
        "time": time.strftime("%Y-%m-%d %H:%M:%S"), "scans": len(outs), "threshold": th, "tta": model.cfg.tta,

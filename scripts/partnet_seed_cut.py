@@ -11,7 +11,7 @@ cannot be judged by the seed scores alone. Writes results/partnet_seed_cut.json.
 """
 import argparse, json, sys, time
 from pathlib import Path
-import numpy as np, torch
+import torch
 
 root = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(root)); sys.path.insert(0, str(root / "scripts"))

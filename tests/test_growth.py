@@ -172,7 +172,6 @@ def test_widgets_headless(toy):
     assert g.tree != s3 and len(g.history) == 10
 
 
-
 @pytest.mark.parametrize("name, before", [("elm-image", 0.002), ("elm-points", 0.0001)])
 def test_shipped_model_reads_its_input(name, before):
     "The shipped elm-image (2D glimpse) and elm-points (3D glimpse) predict a tree's tokens better from its own input than from another tree's."
