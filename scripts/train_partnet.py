@@ -139,11 +139,14 @@ def main():
     ap.add_argument("--train-only", action="store_true", help="train, write the checkpoint in --work and stop; the same command without it evaluates and ships")
     ap.add_argument("--tta", type=int, default=1, help="test-time passes over turned copies of each cloud, averaged (partnet.predict_seeds)")
     ap.add_argument("--junction-seeds", action="store_true", help="seeds only off the junctions the network itself finds, in training and after (PartNetConfig.junction_seeds)")
+    ap.add_argument("--patch-term", action="store_true", help="add the pair-patch term to the affinity (PartNetConfig.patch_term, partnet.PairPatch)")
+    ap.add_argument("--freeze-init", action="store_true", help="with --init: train only the layers those weights lack; the others stay as they are")
     a = ap.parse_args()
     if a.tta < 1: ap.error("--tta must be at least 1")
+    if a.freeze_init and not a.init: ap.error("--freeze-init needs --init")
     torch.set_num_threads(a.threads)
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term,
-                        junction_seeds=a.junction_seeds)
+                        junction_seeds=a.junction_seeds, patch_term=a.patch_term)
     pool_points = a.pool_points or 2 * cfg.n_points
     if pool_points < cfg.n_points: ap.error(f"--pool-points {pool_points} is fewer than --points {cfg.n_points}")
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
@@ -152,7 +155,11 @@ def main():
     gpu = a.device != "cpu" and torch.cuda.is_available()   # without one, a finished GPU run can still be evaluated here
     torch.manual_seed(a.seed)
     model = TreePartNet(cfg).to(a.device if gpu else "cpu")
-    opt = torch.optim.Adam(model.parameters(), lr=a.lr)
+    src = torch.load(a.init, map_location="cpu", weights_only=False) if a.init else None
+    if a.freeze_init:  # the same layers are frozen whether the run starts or resumes
+        for k, p in model.named_parameters(): p.requires_grad_(k not in src["state"])
+        if not any(p.requires_grad for p in model.parameters()): ap.error(f"--freeze-init: {a.init} holds every layer, so nothing would train")
+    opt = torch.optim.Adam([p for p in model.parameters() if p.requires_grad], lr=a.lr)
     device = torch.cuda.get_device_name(torch.device(a.device)) if gpu else f"{platform.machine()}, {a.threads} threads (CPU)"
     ck = work / "checkpoint.pt"
     commit = provenance.commit(short=True)
@@ -168,12 +175,12 @@ def main():
         trained_by = blob.get("trained_by", trained_by)
         print(f"resumed at step {step} ({elapsed / 60:.1f} min)")
     elif a.init:
-        src = torch.load(a.init, map_location="cpu", weights_only=False)
         theirs = PartNetConfig.from_dict(src["config"])
-        if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
+        if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds,
+                   patch_term=cfg.patch_term, patch_points=cfg.patch_points) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
-        print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}")
+        print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}{' (the only layers trained)' if a.freeze_init else ''}")
     def save_checkpoint():
         blob = dict(model={k: v.cpu() for k, v in model.state_dict().items()}, opt=opt.state_dict(), step=step, elapsed=time.time() - t0, log=log,
                     config=cfg.to_dict(), device=device, train_scans=train_scans, trained_by=trained_by)
@@ -227,7 +234,7 @@ def main():
 
 - **Model**: `treebook.partnet.TreePartNet` with `PartNetConfig` {json.dumps(cfg.to_dict())}; {sum(p.numel() for p in model.parameters()):,} parameters, {out.stat().st_size / 1e6:.1f} MB.
 - **Data**: {len(train)} procedural trees ({a.train_per_species} per species: {', '.join(SPECIES)}), each scanned once by `treebook.scan.scan` at {pool_points} points with noise 0-0.4% of the size, 0-2% outliers, 0-2 missing regions and 2-4 views; every step takes {'all ' + str(cfg.n_points) + ' points, shuffled' if pool_points == cfg.n_points else 'a random ' + str(cfg.n_points) + '-point subset'}, turned about z, tilted up to 10 degrees, scaled 0.8-1.2, jittered, normalised into the unit sphere. Labels: branch chains (`branch_chains`) and the scanner's junction flags.{" Seeds: only on points that a first pass of the network does not call junctions (`junction_seeds`), in training and in use." if cfg.junction_seeds else ""}
-- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']}{f", starting from {a.init}" if a.init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
+- **Training**: {step} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last 20% of the time), {minutes:.0f} minutes on {meta['machine']}{f", starting from {a.init}" if a.init else ""}{" and training only the layers it lacks" if a.freeze_init else ""}. Merging: {cfg.linkage} {"(the paper's transitive closure)" if cfg.linkage == "closure" else "linkage"} at {cfg.threshold}, {"chosen on " + str(a.fit_scans) + " training scans for the best merged F1" if fit else "the paper's"}; {cfg.tta} test-time pass{"es over turned copies of the cloud, averaged" if cfg.tta > 1 else ""}{f" (held-out merged F1 with the paper's closure at 0.5: {at_half['f1']:.3f})" if fit else ""}.
 - **Command**: `{trained_by['command']}` (commit {trained_by['commit']}){'' if trained_by['command'] == command else f'; evaluated by `{command}` (commit {commit})'}.
 - **Held-out scores** ({len(test)} scans of trees with other seeds, {cfg.n_points} points, no augmentation): Rand index {metrics['ri']:.3f}, NMI {metrics['nmi']:.3f}, affinity of the neighbouring seed pairs the network scores precision {metrics['aff_precision']:.3f} / recall {metrics['aff_recall']:.3f} / F1 {metrics['aff_f1']:.3f}; merging (all seed pairs, after {"the closure" if cfg.linkage == "closure" else "average linkage"}) precision {metrics['precision']:.3f} / recall {metrics['recall']:.3f} / F1 {metrics['f1']:.3f}; point pairs in one branch (each point with its fine cluster's seed; independent of where the seeds sit) precision {metrics['point_precision']:.3f} / recall {metrics['point_recall']:.3f} / F1 {metrics['point_f1']:.3f}; junction accuracy {metrics['junction_acc']:.3f}; {metrics['clusters']:.1f} predicted vs {metrics['true_parts']:.1f} true parts among the seeds; fine clusters alone RI {metrics['fine_ri']:.3f}, NMI {metrics['fine_nmi']:.3f}.
 - **Limits**: trained for {minutes:.0f} minutes, far short of the paper's schedule; procedural scans only (no foliage). On real scans use it through `treebook.reconstruct.reconstruct(method='partnet')`, which uses the branches to split the geodesic level sets, so a poor clustering degrades gracefully to the classic skeleton.

@@ -23,8 +23,8 @@ from .pointnet2 import PointNet2, gather, mlp
 
 # %% auto #0
 __all__ = ['LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example',
-           'PartNetConfig', 'neighbour_pairs', 'TreePartNet', 'partnet_targets', 'focal_loss', 'partnet_loss',
-           'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores',
+           'PartNetConfig', 'neighbour_pairs', 'PairPatch', 'TreePartNet', 'partnet_targets', 'focal_loss',
+           'partnet_loss', 'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores',
            'point_pair_scores', 'cluster_scores', 'affinity_scores', 'som_clusters']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
@@ -97,11 +97,13 @@ class PartNetConfig:
     linkage: str = "closure"   # how `segment` merges seeds: "closure" (the paper) or "average" (see merge_seeds)
     tta: int = 1               # passes of `segment` over turned copies of the cloud, averaged (see predict_seeds)
     junction_seeds: bool = False  # seeds only on points that a first pass does not call junctions (see TreePartNet.seed_candidates)
+    patch_term: bool = False   # a logit per neighbouring pair from the points around both seeds (see PairPatch)
+    patch_points: int = 16     # the points nearest each seed that PairPatch reads
     def to_dict(self) -> dict: return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
     @classmethod
     def from_dict(cls, d: dict) -> "PartNetConfig":
         names = set(cls.__dataclass_fields__)
-        d = {"pair_term": False, **d}  # weights saved before the pair term existed have none
+        d = {"pair_term": False, "patch_term": False, **d}  # weights saved before these terms existed have none
         return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items() if k in names})
 
 def _nearest_seeds(seed_xyz: torch.Tensor, k: int) -> torch.Tensor:
@@ -118,6 +120,46 @@ def neighbour_pairs(seed_xyz: torch.Tensor, k: int, nb: torch.Tensor | None = No
     near = torch.eye(S, dtype=torch.bool, device=seed_xyz.device).expand(B, S, S).clone().scatter_(2, nb, True)
     return near | near.transpose(1, 2)
 
+def _pair_mean(g, nb, S: int):
+    "(B, S, S) from values `g` (B, S, k) on the directed pairs `nb` (B, S, k): the mean of both directions where both exist, 0 off the pairs."
+    B = g.shape[0]
+    G = g.new_zeros(B, S, S).scatter(2, nb, g); n = g.new_zeros(B, S, S).scatter(2, nb, torch.ones_like(g))
+    return (G + G.transpose(1, 2)) / (n + n.transpose(1, 2)).clamp_min(1)
+
+class PairPatch(nn.Module):
+    """A logit per neighbouring seed pair from the points around the two seeds, seen in the pair's own frame (a small PointNet).
+    Each point of the two seeds' `k` nearest is described by its offset from the pair's midpoint along and across the line
+    of the two seeds (scaled by half their distance; the along-coordinate without its sign, so the pair's order does not
+    matter), its height and absolute distance from that line, the junction probability, and a few learned channels of its
+    feature; a shared MLP and a max over the points give the pair's vector, and an MLP of it and of the pair's length and
+    slope gives the logit. The last layer starts at zero."""
+    def __init__(self, C: int, k: int = 16, proj: int = 8, width: int = 64):
+        super().__init__()
+        self.k = k
+        self.proj = nn.Linear(C, proj)
+        self.point = mlp([7 + proj, width // 2, width])
+        self.head = nn.Sequential(mlp([width + 2, width // 2]), nn.Linear(width // 2, 1))
+        nn.init.zeros_(self.head[-1].weight); nn.init.zeros_(self.head[-1].bias)
+
+    def forward(self, xyz, pf, junction, seed_xyz, nb):
+        "(B, S, S) logits on the pairs `nb` (B, S, k) (mean of both directions), 0 elsewhere; `xyz` (B, N, 3), `pf` (B, N, C), `junction` (B, N) logits."
+        B, S, k = nb.shape
+        near = torch.cdist(seed_xyz, xyz).topk(min(self.k, xyz.shape[1]), dim=-1, largest=False).indices   # (B, S, m)
+        idx = torch.cat([near[:, :, None].expand(-1, -1, k, -1), gather(near, nb)], -1)                   # (B, S, k, 2m): both seeds' points
+        xi, xj = seed_xyz[:, :, None], gather(seed_xyz, nb)                                               # (B, S, 1, 3), (B, S, k, 3)
+        mid, h = (xi + xj) / 2, ((xj - xi).norm(dim=-1, keepdim=True) / 2).clamp_min(1e-6)
+        u = (xj - xi) / (2 * h)
+        v = gather(xyz, idx) - mid[:, :, :, None]                                                          # (B, S, k, 2m, 3)
+        t = (v * u[:, :, :, None]).sum(-1, keepdim=True)
+        perp = v - t * u[:, :, :, None]
+        r, hh = perp.norm(dim=-1, keepdim=True), h[:, :, :, None]
+        jp = torch.sigmoid(gather(junction.detach()[..., None], idx))
+        f = torch.cat([t.abs() / hh, r / hh, 20 * r, v[..., 2:] / hh, perp[..., 2:] / hh, v.norm(dim=-1, keepdim=True) / hh, jp,
+                       gather(self.proj(pf), idx)], -1)
+        x = self.point(f).amax(-2)                                                                         # (B, S, k, width)
+        g = self.head(torch.cat([x, 10 * h, u[..., 2:].abs()], -1))[..., 0]
+        return _pair_mean(g, nb, S)
+
 class TreePartNet(nn.Module):
     "PointNet++ with junction, fine-clustering and affinity heads (TreePartNet, section 4)."
     def __init__(self, cfg: PartNetConfig | None = None):
@@ -133,6 +175,7 @@ class TreePartNet(nn.Module):
         if cfg.pair_term:  # a correction per neighbouring pair; starts at zero, so it can be added to trained weights
             self.pair = nn.Sequential(mlp([2 * C + 3, C]), nn.Linear(C, 1))
             nn.init.zeros_(self.pair[-1].weight); nn.init.zeros_(self.pair[-1].bias)
+        if cfg.patch_term: self.patch = PairPatch(C, cfg.patch_points)   # starts at zero too
 
     def pair_logits(self, e, seed_xyz, nb):
         "(B, S, S) the pair term: an MLP of the two embeddings (symmetric) and their offset, on the pairs `nb` (B, S, k), 0 elsewhere."
@@ -140,9 +183,7 @@ class TreePartNet(nn.Module):
         dx = gather(seed_xyz, nb) - seed_xyz[:, :, None]
         geo = torch.stack([dx.norm(dim=-1), dx[..., 2].abs(), dx[..., :2].norm(dim=-1)], -1)  # distance, rise, run: turn-invariant
         g = self.pair(torch.cat([ei + ej, (ei - ej).abs(), geo], -1))[..., 0]
-        B, S, _ = e.shape
-        G = e.new_zeros(B, S, S).scatter(2, nb, g); n = e.new_zeros(B, S, S).scatter(2, nb, torch.ones_like(g))
-        return (G + G.transpose(1, 2)) / (n + n.transpose(1, 2)).clamp_min(1)  # the mean of both directions
+        return _pair_mean(g, nb, e.shape[1])
 
     def affinity(self, seed_xyz, seed_feat, nb=None):
         "(B, S, S) affinity logits of the seeds: `scale * (margin - D)` with D the (scaled cosine) distance of their embeddings, plus the pair term."
@@ -169,8 +210,10 @@ class TreePartNet(nn.Module):
         k = min(self.cfg.k_seeds, sx.shape[1])
         knn = torch.cdist(xyz, sx).topk(k, dim=-1, largest=False).indices  # (B, N, k), nearest first
         fine = self.fine(pf[:, :, None] - gather(sf, knn))[..., 0]
-        nb = _nearest_seeds(sx, self.cfg.pair_neighbours)  # once, for the pair term and the pairs scored
-        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=self.junction(pf)[..., 0], fine=fine, affinity=self.affinity(sx, sf, nb),
+        nb = _nearest_seeds(sx, self.cfg.pair_neighbours)  # once, for the pair terms and the pairs scored
+        junction, affinity = self.junction(pf)[..., 0], self.affinity(sx, sf, nb)
+        if self.cfg.patch_term: affinity = affinity + self.patch(xyz, pf, junction, sx, nb)
+        return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=junction, fine=fine, affinity=affinity,
                     pairs=neighbour_pairs(sx, self.cfg.pair_neighbours, nb))
 
 # %% ../nbs/09a_partnet.ipynb #b467cf8e
