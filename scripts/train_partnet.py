@@ -140,13 +140,15 @@ def main():
     ap.add_argument("--tta", type=int, default=1, help="test-time passes over turned copies of each cloud, averaged (partnet.predict_seeds)")
     ap.add_argument("--junction-seeds", action="store_true", help="seeds only off the junctions the network itself finds, in training and after (PartNetConfig.junction_seeds)")
     ap.add_argument("--patch-term", action="store_true", help="add the pair-patch term to the affinity (PartNetConfig.patch_term, partnet.PairPatch)")
+    ap.add_argument("--patch-points", type=int, default=PartNetConfig.patch_points, help="with --patch-term: the points nearest each seed that it reads")
     ap.add_argument("--freeze-init", action="store_true", help="with --init: train only the layers those weights lack; the others stay as they are")
     a = ap.parse_args()
     if a.tta < 1: ap.error("--tta must be at least 1")
     if a.freeze_init and not a.init: ap.error("--freeze-init needs --init")
+    if a.patch_points < 1: ap.error("--patch-points must be at least 1")
     torch.set_num_threads(a.threads)
     cfg = PartNetConfig(cosine=not a.no_cosine, focal=not a.no_focal, width=a.width, n_points=a.points, pair_term=not a.no_pair_term,
-                        junction_seeds=a.junction_seeds, patch_term=a.patch_term)
+                        junction_seeds=a.junction_seeds, patch_term=a.patch_term, patch_points=a.patch_points)
     pool_points = a.pool_points or 2 * cfg.n_points
     if pool_points < cfg.n_points: ap.error(f"--pool-points {pool_points} is fewer than --points {cfg.n_points}")
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
