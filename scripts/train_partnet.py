@@ -201,7 +201,7 @@ def main():
         out = model(q, seed=s, seed_mask=model.seed_candidates(q, seed=s))  # with --junction-seeds a first pass (no gradient) finds the junctions
         loss, parts = partnet_loss(out, part, junc, cfg)
         opt.zero_grad(); loss.backward(); opt.step()
-        step += 1; run.append([float(loss), parts["junction"], parts["fine"], parts["affinity"]])
+        step += 1; run.append([loss.item(), parts["junction"], parts["fine"], parts["affinity"]])
         bar.update(1); bar.set_postfix(loss=f"{np.mean([r[0] for r in run[-20:]]):.3f}")
         if step % a.every == 0:
             log.append(dict(step=step, minutes=(time.time() - t0) / 60, **dict(zip(["loss", "junction", "fine", "affinity"], np.mean(run, 0).tolist()))))
