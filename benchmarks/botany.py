@@ -10,7 +10,7 @@ import provenance   # scripts/provenance.py
 
 import numpy as np
 
-from treebook.botany import SPECIES, grow, grow_tree, tree_stats
+from treebook.botany import SPECIES, grow_tree, tree_stats
 from treebook.datasets import generate_dataset
 from treebook.scan import scan, silhouette, sketch
 from treebook.tree import _atomic_write

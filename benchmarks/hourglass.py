@@ -75,7 +75,7 @@ def run_worker(args, **kw):
 
 def sampling(args):
     "Time sampling one tree (cached, uncached) and a batch of 16 (cached) from an untrained Full model."
-    import numpy as np, torch
+    import torch
     from types import SimpleNamespace
     from treebook.hourglass import ModelConfig, TreeTransformer
     from treebook.sampling import CONTRACT, sample

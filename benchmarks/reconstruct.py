@@ -8,7 +8,7 @@ With --merge the parts (and, for the clustering table, the rows) computed by thi
 everything else is kept; the run is recorded under "updates" with its command and commit. For example, the SOM row alone:
   python benchmarks/reconstruct.py --only clustering --cluster-rows som --cluster-scans 6 --merge
 """
-import argparse, json, os, platform, resource, subprocess, sys, time
+import argparse, json, os, platform, subprocess, sys, time
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 import provenance   # scripts/provenance.py

@@ -6,7 +6,7 @@ Timing is round-robin over the architectures (each repeat times every one once),
 all of them alike; the median is reported. Memory: each architecture in a fresh process, peak resident set (VmHWM, reset just before) during two
 steps minus the resident set before the first. Writes results/ablation_cost.json (command, commit, machine).
 """
-import argparse, json, os, platform, resource, subprocess, sys, time
+import argparse, json, os, platform, subprocess, sys, time
 from pathlib import Path
 import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch

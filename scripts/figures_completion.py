@@ -27,7 +27,6 @@ with tempfile.TemporaryDirectory() as d:
         full = grow("elm", seed=10 ** 6 + k)[-1]                       # seeds far from the dataset's
         part = full.prefix(max(1, int(a.cut * full.n)), "dfs")
         out = complete(part, n=a.n, seed=a.seed + k, model=a.model)
-        from treebook.tokens import Tokenizer
         from treebook.train import load_pretrained
         tok = load_pretrained(a.model)[1]
         ref = part.take(tok.order(part, "dfs", normalize=False))

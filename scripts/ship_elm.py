@@ -12,7 +12,7 @@ from treebook.hourglass import TreeTransformer
 from treebook.tokens import Tokenizer
 from treebook.sampling import sample
 from treebook.train import perplexity, WEIGHTS
-from treebook.metrics import tree_clouds, evaluate, nearest, connect_rate, fpd, load_species_pointnet
+from treebook.metrics import tree_clouds, evaluate, connect_rate, fpd, load_species_pointnet
 
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor

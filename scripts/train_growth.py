@@ -16,7 +16,7 @@ import numpy as np, torch
 from treebook.tree import Tree
 from treebook.botany import grow
 from treebook.datasets import load_manifest
-from treebook.tokens import Tokenizer, STAGE
+from treebook.tokens import Tokenizer
 from treebook.hourglass import ModelConfig, TreeTransformer
 from treebook.train import WEIGHTS, perplexity, load_pretrained
 from treebook.growth import (encode_growth, decode_growth, containment, extend_context, fit, growth_batch, lm_loss,

@@ -9,7 +9,7 @@ import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from tqdm.auto import tqdm
 from treebook.botany import SPECIES, grow_tree, species
-from treebook.metrics import tree_clouds, train_species_pointnet, save_species_pointnet, pointnet_features, POINTNET_POINTS
+from treebook.metrics import tree_clouds, train_species_pointnet, save_species_pointnet, POINTNET_POINTS
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
