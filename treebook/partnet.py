@@ -143,7 +143,7 @@ class PairPatch(nn.Module):
 
     def forward(self, xyz, pf, junction, seed_xyz, nb):
         "(B, S, S) logits on the pairs `nb` (B, S, k) (mean of both directions), 0 elsewhere; `xyz` (B, N, 3), `pf` (B, N, C), `junction` (B, N) logits."
-        B, S, k = nb.shape
+        S, k = nb.shape[1:]
         near = torch.cdist(seed_xyz, xyz).topk(min(self.k, xyz.shape[1]), dim=-1, largest=False).indices   # (B, S, m)
         idx = torch.cat([near[:, :, None].expand(-1, -1, k, -1), gather(near, nb)], -1)                   # (B, S, k, 2m): both seeds' points
         xi, xj = seed_xyz[:, :, None], gather(seed_xyz, nb)                                               # (B, S, 1, 3), (B, S, k, 3)
