@@ -175,7 +175,7 @@ def main():
         step, elapsed, log = blob["step"], blob["elapsed"], blob["log"]
         device, train_scans = blob.get("device", device), blob.get("train_scans", len(train))   # where it was trained
         trained_by = blob.get("trained_by", trained_by)
-        print(f"resumed at step {step} ({elapsed / 60:.1f} min)")
+        print(f"resumed at step {step} ({elapsed / 60:.1f} min)" + (f"; {a.init} is not read for the weights: the checkpoint's are used" * bool(a.init)))
     elif a.init:
         theirs = PartNetConfig.from_dict(src["config"])
         if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds,
@@ -208,7 +208,8 @@ def main():
             run = []
             save_checkpoint()
     bar.close()
-    if not log or log[-1]["step"] != step: save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
+    if step and (not log or log[-1]["step"] != step): save_checkpoint()  # the last steps since a checkpoint, so that a re-run evaluates these weights
+    # (nothing trained, nothing saved: a later --steps 0 in the same --work then evaluates its own --init, not these weights)
     if a.train_only: print(f"trained {step} steps; evaluate with the same command without --train-only"); return
     model.cpu()
     minutes = (time.time() - t0) / 60

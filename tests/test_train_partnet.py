@@ -1,4 +1,5 @@
-"""scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message."""
+"""scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
+an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one."""
 import subprocess, sys
 from pathlib import Path
 import pytest, torch
@@ -45,3 +46,14 @@ def test_freeze_init_misuse(base):
     assert r.returncode != 0 and "--freeze-init needs --init" in r.stderr
     r = run(*SMALL, "--steps", "1", "--work", str(work / "base"), "--init", str(init), "--freeze-init")
     assert r.returncode != 0 and "nothing would train" in r.stderr
+
+
+def test_evaluating_init_weights_leaves_no_checkpoint(base):
+    work, init = base
+    (work / "ev").mkdir()
+    for f in ("train_pool.npz", "test_pool.npz"): (work / "ev" / f).write_bytes((work / "base" / f).read_bytes())
+    r = run(*SMALL, "--steps", "0", "--work", str(work / "ev"), "--init", str(init))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "started from" in r.stdout and not (work / "ev" / "checkpoint.pt").exists()   # a second --init here is read, not shadowed
+    r = run(*SMALL, "--steps", "2", "--work", str(work / "base"), "--init", str(init))   # a checkpoint there: it wins, and says so
+    assert r.returncode == 0 and "resumed at step 2" in r.stdout and "is not read" in r.stdout
