@@ -175,7 +175,7 @@ def main():
         step, elapsed, log = blob["step"], blob["elapsed"], blob["log"]
         device, train_scans = blob.get("device", device), blob.get("train_scans", len(train))   # where it was trained
         trained_by = blob.get("trained_by", trained_by)
-        print(f"resumed at step {step} ({elapsed / 60:.1f} min)" + (f"; {a.init} is not read for the weights: the checkpoint's are used" * bool(a.init)))
+        print(f"resumed at step {step} ({elapsed / 60:.1f} min)" + (f"; {a.init} is not read for the weights: the checkpoint's are used" if a.init else ""))
     elif a.init:
         theirs = PartNetConfig.from_dict(src["config"])
         if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds,
