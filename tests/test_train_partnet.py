@@ -1,6 +1,6 @@
 """scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
 an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one."""
-import subprocess, sys
+import shutil, subprocess, sys
 from pathlib import Path
 import pytest, torch
 
@@ -11,6 +11,13 @@ SMALL = ["--points", "512", "--pool-points", "512", "--width", "8", "--batch", "
 
 def run(*args):
     return subprocess.run([sys.executable, str(ROOT / "scripts" / "train_partnet.py"), *args], capture_output=True, text=True, timeout=600)
+
+
+def pools_in(work, name):
+    "A fresh --work beside the base one, holding only its scan pools (no checkpoint)."
+    (work / name).mkdir()
+    for f in ("train_pool.npz", "test_pool.npz"): shutil.copy(work / "base" / f, work / name / f)
+    return work / name
 
 
 @pytest.fixture(scope="module")
@@ -27,9 +34,7 @@ def base(tmp_path_factory):
 
 def test_freeze_init_trains_the_patch_term_alone(base):
     work, init = base
-    (work / "patch").mkdir()
-    for f in ("train_pool.npz", "test_pool.npz"): (work / "patch" / f).write_bytes((work / "base" / f).read_bytes())
-    r = run(*SMALL, "--steps", "3", "--lr", "1e-2", "--work", str(work / "patch"), "--init", str(init), "--patch-term", "--freeze-init")
+    r = run(*SMALL, "--steps", "3", "--lr", "1e-2", "--work", str(pools_in(work, "patch")), "--init", str(init), "--patch-term", "--freeze-init")
     assert r.returncode == 0, r.stderr[-2000:]
     assert "the only layers trained" in r.stdout
     before = torch.load(init, weights_only=False)["state"]
@@ -50,9 +55,7 @@ def test_freeze_init_misuse(base):
 
 def test_evaluating_init_weights_leaves_no_checkpoint(base):
     work, init = base
-    (work / "ev").mkdir()
-    for f in ("train_pool.npz", "test_pool.npz"): (work / "ev" / f).write_bytes((work / "base" / f).read_bytes())
-    r = run(*SMALL, "--steps", "0", "--work", str(work / "ev"), "--init", str(init))
+    r = run(*SMALL, "--steps", "0", "--work", str(pools_in(work, "ev")), "--init", str(init))
     assert r.returncode == 0, r.stderr[-2000:]
     assert "started from" in r.stdout and not (work / "ev" / "checkpoint.pt").exists()   # a second --init here is read, not shadowed
     r = run(*SMALL, "--steps", "2", "--work", str(work / "base"), "--init", str(init))   # a checkpoint there: it wins, and says so
