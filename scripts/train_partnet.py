@@ -47,16 +47,19 @@ def load_or_make_pool(path: Path, **kw):
     if path.exists():
         with np.load(path, allow_pickle=False) as z:  # read each array once: every z[...] reads the whole array again
             P, T, J, off, species = (z[k] for k in ("points", "part", "junction", "offsets", "species"))
+            made_with = int(z["seed"]) if "seed" in z else None   # pools made before the seed was kept, or unpacked ones: unknown
         want = kw.get("n_points")  # a cached pool must hold what the command asks for (callers that only read it pass nothing)
         if want and len(off) > 1 and not np.all(np.diff(off) == want):
             sys.exit(f"{path} holds scans of {sorted(set(np.diff(off).tolist()))} points, not {want}: use another --work or --pool-points")
+        if kw.get("seed") is not None and made_with is not None and made_with != kw["seed"]:
+            sys.exit(f"{path} holds the scans of seed {made_with}, not {kw['seed']}: use another --work")
         return [dict(points=P[a:b], part=T[a:b], junction=J[a:b], species=str(sp)) for a, b, sp in zip(off[:-1], off[1:], species)]
     pool = make_pool(**kw)
     off = np.concatenate([[0], np.cumsum([len(p["points"]) for p in pool])])
     _atomic_write(path, lambda f: np.savez(f, points=np.concatenate([p["points"] for p in pool]),
                                            part=np.concatenate([p["part"] for p in pool]),
                                            junction=np.concatenate([p["junction"] for p in pool]),
-                                           offsets=off, species=np.array([p["species"] for p in pool])))
+                                           offsets=off, species=np.array([p["species"] for p in pool]), seed=np.array(kw["seed"])))
     return pool
 
 
@@ -120,6 +123,7 @@ def main():
     ap.add_argument("--lr", type=float, default=1e-3)
     ap.add_argument("--train-per-species", type=int, default=60)
     ap.add_argument("--test-per-species", type=int, default=5)
+    ap.add_argument("--test-seed", type=int, default=999, help="the held-out trees: 1000 * this + i (999: the scans every record before it used)")
     ap.add_argument("--every", type=int, default=25)
     ap.add_argument("--work", default=str(root / "tmp" / "partnet"))
     ap.add_argument("--out", default=str(root / "treebook" / "data" / "weights" / "partnet.pt"))
@@ -153,7 +157,7 @@ def main():
     if pool_points < cfg.n_points: ap.error(f"--pool-points {pool_points} is fewer than --points {cfg.n_points}")
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     train = load_or_make_pool(work / "train_pool.npz", n_per_species=a.train_per_species, seed=1 + a.seed, n_points=pool_points, desc="train scans")
-    test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=999, n_points=pool_points, desc="test scans")
+    test = load_or_make_pool(work / "test_pool.npz", n_per_species=a.test_per_species, seed=a.test_seed, n_points=pool_points, desc="test scans")
     gpu = a.device != "cpu" and torch.cuda.is_available()   # without one, a finished GPU run can still be evaluated here
     torch.manual_seed(a.seed)
     model = TreePartNet(cfg).to(a.device if gpu else "cpu")

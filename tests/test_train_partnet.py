@@ -60,3 +60,15 @@ def test_evaluating_init_weights_leaves_no_checkpoint(base):
     assert "started from" in r.stdout and not (work / "ev" / "checkpoint.pt").exists()   # a second --init here is read, not shadowed
     r = run(*SMALL, "--steps", "2", "--work", str(work / "base"), "--init", str(init))   # a checkpoint there: it wins, and says so
     assert r.returncode == 0 and "resumed at step 2" in r.stdout and "is not read" in r.stdout
+
+
+def test_test_seed_makes_other_scans_and_a_cached_pool_is_checked(base):
+    work, init = base
+    r = run(*SMALL, "--steps", "0", "--work", str(pools_in(work, "seed5")), "--test-seed", "5")
+    assert r.returncode != 0 and "holds the scans of seed 999, not 5" in r.stderr     # the pool cached there is another seed's
+    r = run(*SMALL, "--steps", "0", "--work", str(work / "fresh5"), "--test-seed", "5")   # --train-only: makes the pools, trains nothing
+    assert r.returncode == 0, r.stderr[-2000:]
+    import numpy as np
+    with np.load(work / "fresh5" / "test_pool.npz") as z, np.load(work / "base" / "test_pool.npz") as b:
+        assert int(z["seed"]) == 5 and int(b["seed"]) == 999
+        assert z["points"].shape == b["points"].shape and not np.allclose(z["points"], b["points"])
