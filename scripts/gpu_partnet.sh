@@ -2,7 +2,7 @@
 # Train TreePartNet runs side by side on one GPU (a machine that cannot scan: no open3d), each to its own --minutes.
 #
 # Usage: scripts/gpu_partnet.sh POOLS OUTDIR "ARGS" ["ARGS" ...]
-#   POOLS: the train pool as scripts/pool_pack.py packs it. ARGS: scripts/train_partnet.py's arguments for one run, with
+#   POOLS: the train pool as scripts/pool_pack.py packs it (several, comma-separated, make one pool). ARGS: scripts/train_partnet.py's arguments for one run, with
 #   --work and --minutes, without --device or --train-only. Each run's --work receives the unpacked pool; OUTDIR receives
 #   NAME.pt (NAME: the last part of --work), the run's checkpoint with the optimiser's moments left out, and NAME.log.
 #   To evaluate a run on any machine, put NAME.pt in its --work as checkpoint.pt and give train_partnet.py the same ARGS
