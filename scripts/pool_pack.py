@@ -6,7 +6,7 @@ Usage: python scripts/pool_pack.py pack tmp/partnet5 gpu/pools.npz [train|test] 
                                                                                         in another order)
 Used to train on a machine that cannot scan (no open3d) from the pools made here; unpacked pools load like made ones.
 `make` scans a further train pool (trees 1000 * SEED + i, i < N_PER_SPECIES, of every species, 8,192 points: train_partnet.py's
-own pool is SEED 1, its test pools 999) and packs it; `unpack` of several packed files puts their train scans in one pool.
+own pool is SEED 1, its test pools 999 and, with --test-seed, others) and packs it; `unpack` of several packed files puts their train scans in one pool.
 """
 import sys
 from pathlib import Path

@@ -20,12 +20,12 @@ def test_soup_is_the_mean(tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     got, a, b = (load_partnet(p).state_dict() for p in (tmp_path / "soup.pt", *runs))
     assert all(torch.allclose(got[k], (a[k] + b[k]) / 2) for k in got)
+    assert any(not torch.equal(a[k], b[k]) for k in a)    # two different runs, so the mean is neither
     ck = tmp_path / "checkpoint.pt"                          # a train_partnet.py checkpoint is read as well
     torch.save(dict(model=b, config=load_partnet(runs[1]).cfg.to_dict(), opt={}, step=3), ck)
     r = soup(tmp_path / "soup2.pt", runs[0], ck)
     assert r.returncode == 0, r.stderr[-2000:]
     assert all(torch.allclose(load_partnet(tmp_path / "soup2.pt").state_dict()[k], got[k]) for k in got)
-    assert any(not torch.equal(a[k], b[k]) for k in a)    # two different runs, so the mean is neither
 
 
 def test_soup_refuses_other_networks(tmp_path):

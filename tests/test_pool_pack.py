@@ -1,6 +1,6 @@
 """scripts/pool_pack.py: a further train pool made with its own tree seeds, packed, and unpacked together with another
 into one pool that train_partnet.py loads, each scan's points and labels as they were scanned (to 16-bit steps of its box)."""
-import sys
+import subprocess, sys
 from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
@@ -29,7 +29,6 @@ def test_make_and_unpack_several(tmp_path):
     assert not np.allclose(got[0]["points"].mean(0), got[len(SPECIES)]["points"].mean(0))   # two seeds, two different trees
 
 
-def test_usage(capsys):
-    import subprocess
+def test_usage():
     r = subprocess.run([sys.executable, str(ROOT / "scripts" / "pool_pack.py"), "make", "2", "1"], capture_output=True, text=True)
     assert r.returncode != 0 and "Usage" in r.stderr

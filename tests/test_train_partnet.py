@@ -2,7 +2,7 @@
 an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one."""
 import shutil, subprocess, sys
 from pathlib import Path
-import pytest, torch
+import numpy as np, pytest, torch
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ["--points", "512", "--pool-points", "512", "--width", "8", "--batch", "2", "--train-per-species", "1", "--test-per-species", "1",
@@ -68,7 +68,6 @@ def test_test_seed_makes_other_scans_and_a_cached_pool_is_checked(base):
     assert r.returncode != 0 and "holds the scans of seed 999, not 5" in r.stderr     # the pool cached there is another seed's
     r = run(*SMALL, "--steps", "0", "--work", str(work / "fresh5"), "--test-seed", "5")   # --train-only: makes the pools, trains nothing
     assert r.returncode == 0, r.stderr[-2000:]
-    import numpy as np
     with np.load(work / "fresh5" / "test_pool.npz") as z, np.load(work / "base" / "test_pool.npz") as b:
         assert int(z["seed"]) == 5 and int(b["seed"]) == 999
         assert z["points"].shape == b["points"].shape and not np.allclose(z["points"], b["points"])
