@@ -92,6 +92,12 @@ def seed_outputs(model, pool, n, seed=12345) -> list:
 
 def evaluate(outs, threshold, linkage):
     "Mean RI, NMI, merging precision/recall/F1 (seed pairs and point pairs), junction accuracy over `seed_outputs`, merging at `threshold` by `linkage`."
+    rows = scan_scores(outs, threshold, linkage)
+    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+
+
+def scan_scores(outs, threshold, linkage) -> list:
+    "`evaluate`'s scores for each scan of `seed_outputs` (a dict per scan)."
     th, rows = threshold, []
     for o in outs:
         sb, sp = merge_seeds(o["prob"], th, linkage=linkage, pairs=o["pairs"]), o["seed_part"]
@@ -103,7 +109,7 @@ def evaluate(outs, threshold, linkage):
                          fine_ri=fs["ri"], fine_nmi=fs["nmi"], precision=ms["precision"], recall=ms["recall"], f1=ms["f1"],
                          aff_precision=af["precision"], aff_recall=af["recall"], aff_f1=af["f1"], point_precision=pps["precision"], point_recall=pps["recall"], point_f1=pps["f1"],
                          junction_acc=o["junction_acc"]))
-    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+    return rows
 
 
 def fit_threshold(model, pool, n, linkages=("closure",), grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
@@ -224,7 +230,9 @@ def main():
         cfg.linkage, cfg.threshold, fit = fit_threshold(model, train[:a.fit_scans], cfg.n_points, LINKAGES if a.linkage == "auto" else (a.linkage,))
         print(f"merging: {cfg.linkage} at {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[f'{cfg.linkage}@{cfg.threshold:.2f}']:.3f})")
     outs = seed_outputs(model, test, cfg.n_points)  # the network runs once; the three mergings below reuse its outputs
-    metrics = evaluate(outs, cfg.threshold, cfg.linkage)
+    rows = scan_scores(outs, cfg.threshold, cfg.linkage)
+    metrics = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+    per_scan = {k: [round(r[k], 5) for r in rows] for k in ("aff_f1", "f1", "nmi")}   # in the pool's order: for intervals over the scans
     at_half = evaluate(outs, 0.5, "closure")  # the paper's merging
     metrics["closure_f1"] = evaluate(outs, cfg.threshold, "closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
     print(json.dumps(metrics, indent=1))
@@ -235,7 +243,7 @@ def main():
     save_partnet(model, out, **meta)
     res = Path(a.results) if a.results else root / "results" / f"partnet_train{'_nocos' if a.no_cosine else ''}{'_nofocal' if a.no_focal else ''}.json"
     res.parent.mkdir(exist_ok=True)
-    _atomic_write(res, lambda f: f.write(json.dumps(dict(config=cfg.to_dict(), log=log, **meta), indent=1).encode()))
+    _atomic_write(res, lambda f: f.write(json.dumps(dict(config=cfg.to_dict(), log=log, **meta, per_scan=per_scan), indent=1).encode()))
     if out.name == "partnet.pt":
         card = f"""# TreePartNet weights (`partnet.pt`)
 

@@ -1,6 +1,7 @@
 """scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
-an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one."""
-import shutil, subprocess, sys
+an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one; --test-seed and the
+scores per scan that an evaluation records."""
+import json, shutil, subprocess, sys
 from pathlib import Path
 import numpy as np, pytest, torch
 
@@ -71,3 +72,16 @@ def test_test_seed_makes_other_scans_and_a_cached_pool_is_checked(base):
     with np.load(work / "fresh5" / "test_pool.npz") as z, np.load(work / "base" / "test_pool.npz") as b:
         assert int(z["seed"]) == 5 and int(b["seed"]) == 999
         assert z["points"].shape == b["points"].shape and not np.allclose(z["points"], b["points"])
+
+
+def test_evaluation_records_each_scan(base):
+    work, init = base
+    out, res = work / "ev2" / "w.pt", work / "ev2" / "r.json"
+    args = [x for x in SMALL if x != "--train-only"]
+    r = run(*args, "--steps", "0", "--work", str(pools_in(work, "ev2")), "--init", str(init), "--out", str(out), "--results", str(res))
+    assert r.returncode == 0, r.stderr[-2000:]
+    rec = json.loads(res.read_text())
+    for k in ("aff_f1", "f1", "nmi"):   # one score per held-out scan, whose mean is the record's
+        assert len(rec["per_scan"][k]) == rec["test_scans"] == 6
+        assert abs(np.mean(rec["per_scan"][k]) - rec["metrics"][k]) < 1e-4
+    assert out.exists() and not (out.parent / "partnet.md").exists()   # only weights named partnet.pt get a card
