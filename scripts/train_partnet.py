@@ -92,7 +92,11 @@ def seed_outputs(model, pool, n, seed=12345) -> list:
 
 def evaluate(outs, threshold, linkage):
     "Mean RI, NMI, merging precision/recall/F1 (seed pairs and point pairs), junction accuracy over `seed_outputs`, merging at `threshold` by `linkage`."
-    rows = scan_scores(outs, threshold, linkage)
+    return mean_scores(scan_scores(outs, threshold, linkage))
+
+
+def mean_scores(rows) -> dict:
+    "The mean over the scans of each score in `rows` (`scan_scores`)."
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
 
 
@@ -231,7 +235,7 @@ def main():
         print(f"merging: {cfg.linkage} at {cfg.threshold} (mean merged F1 on {a.fit_scans} training scans {fit[f'{cfg.linkage}@{cfg.threshold:.2f}']:.3f})")
     outs = seed_outputs(model, test, cfg.n_points)  # the network runs once; the three mergings below reuse its outputs
     rows = scan_scores(outs, cfg.threshold, cfg.linkage)
-    metrics = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
+    metrics = mean_scores(rows)
     per_scan = {k: [round(r[k], 5) for r in rows] for k in ("aff_f1", "f1", "nmi")}   # in the pool's order: for intervals over the scans
     at_half = evaluate(outs, 0.5, "closure")  # the paper's merging
     metrics["closure_f1"] = evaluate(outs, cfg.threshold, "closure")["f1"] if cfg.linkage != "closure" else metrics["f1"]
