@@ -47,7 +47,7 @@ def unpack(srcs, work):
             np.savez(Path(work) / f"{name}_pool.npz", points=np.zeros((0, 3), np.float32), part=np.zeros(0, np.int32),
                      junction=np.zeros(0, bool), offsets=np.zeros(1, np.int64), species=np.zeros(0, "<U8")); continue
         P, T, J, off, sp = zip(*parts)
-        off = np.concatenate([[0]] + [o[1:] + sum(len(x) for x in P[:k]) for k, o in enumerate(off)])
+        off = np.concatenate([[0], np.cumsum(np.concatenate([np.diff(o) for o in off]))])   # the scans' sizes, one pool after another
         np.savez(Path(work) / f"{name}_pool.npz", points=np.concatenate(P), part=np.concatenate(T), junction=np.concatenate(J),
                  offsets=off, species=np.concatenate(sp))
 
