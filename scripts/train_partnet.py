@@ -116,9 +116,16 @@ def scan_scores(outs, threshold, linkage) -> list:
     return rows
 
 
-def fit_threshold(model, pool, n, linkages=("closure",), grid=np.round(np.arange(0.30, 0.705, 0.02), 2)):
+GRID = np.round(np.arange(0.30, 0.705, 0.02), 2)
+
+
+def fit_threshold(model, pool, n, linkages=("closure",), grid=GRID):
     "(linkage, threshold) with the best mean merged F1 on `pool` (training scans), and that F1 for every pair tried ('linkage@threshold')."
-    outs = seed_outputs(model, pool, n, seed=777)
+    return choose_merging(seed_outputs(model, pool, n, seed=777), linkages, grid)
+
+
+def choose_merging(outs, linkages=("closure",), grid=GRID):
+    "`fit_threshold` on given `seed_outputs`."
     f1 = {(l, float(t)): float(np.mean([merge_scores(merge_seeds(o["prob"], t, linkage=l, pairs=o["pairs"]), o["seed_part"])["f1"] for o in outs]))
           for l in linkages for t in grid}
     linkage, threshold = max(f1, key=f1.get)
@@ -193,7 +200,10 @@ def main():
     elif a.init:
         theirs = PartNetConfig.from_dict(src["config"])
         if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds,
-                   patch_term=cfg.patch_term, patch_points=cfg.patch_points) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
+                   patch_term=cfg.patch_term, patch_points=cfg.patch_points, pair_context=cfg.pair_context) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
+        if any(k.startswith("context.") for k in src["state"]):   # a pair context fits the network it was trained on: it is not carried over
+            src["state"] = {k: v for k, v in src["state"].items() if not k.startswith("context.")}
+            print(f"{a.init}: its pair context is left out (train a new one with scripts/train_pair_context.py)")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")
         print(f"started from {a.init}; fresh: {', '.join(missing) or 'nothing'}{' (the only layers trained)' if a.freeze_init else ''}")

@@ -16,16 +16,18 @@ import torch.nn.functional as F
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+from tqdm.auto import tqdm
 
 from .tree import Tree, TreebookError, _atomic_write
 from .mesh import continuation
 from .pointnet2 import PointNet2, gather, mlp
 
 # %% auto #0
-__all__ = ['LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment', 'training_example',
-           'PartNetConfig', 'neighbour_pairs', 'PairPatch', 'TreePartNet', 'partnet_targets', 'focal_loss',
-           'partnet_loss', 'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores',
-           'point_pair_scores', 'cluster_scores', 'affinity_scores', 'som_clusters']
+__all__ = ['N_PAIR_FEATURES', 'LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment',
+           'training_example', 'PartNetConfig', 'neighbour_pairs', 'PairPatch', 'TreePartNet', 'pair_features',
+           'PairContext', 'refine_pairs', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds',
+           'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores', 'point_pair_scores',
+           'cluster_scores', 'affinity_scores', 'som_clusters', 'train_pair_context']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -99,6 +101,7 @@ class PartNetConfig:
     junction_seeds: bool = False  # seeds only on points that a first pass does not call junctions (see TreePartNet.seed_candidates)
     patch_term: bool = False   # a logit per neighbouring pair from the points around both seeds (see PairPatch)
     patch_points: int = 16     # the points nearest each seed that PairPatch reads
+    pair_context: bool = False  # a second look at each scored pair, from the seeds' other pairs (see PairContext)
     def to_dict(self) -> dict: return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
     @classmethod
     def from_dict(cls, d: dict) -> "PartNetConfig":
@@ -176,6 +179,7 @@ class TreePartNet(nn.Module):
             self.pair = nn.Sequential(mlp([2 * C + 3, C]), nn.Linear(C, 1))
             nn.init.zeros_(self.pair[-1].weight); nn.init.zeros_(self.pair[-1].bias)
         if cfg.patch_term: self.patch = PairPatch(C, cfg.patch_points)   # starts at zero too
+        if cfg.pair_context: self.context = PairContext()   # trained apart, after the network (train_pair_context)
 
     def pair_logits(self, e, seed_xyz, nb):
         "(B, S, S) the pair term: an MLP of the two embeddings (symmetric) and their offset, on the pairs `nb` (B, S, k), 0 elsewhere."
@@ -215,6 +219,51 @@ class TreePartNet(nn.Module):
         if self.cfg.patch_term: affinity = affinity + self.patch(xyz, pf, junction, sx, nb)
         return dict(seed_xyz=sx, seed_idx=si, knn=knn, junction=junction, fine=fine, affinity=affinity,
                     pairs=neighbour_pairs(sx, self.cfg.pair_neighbours, nb))
+
+# %% ../nbs/09a_partnet.ipynb #dca01151
+N_PAIR_FEATURES = 17
+
+def pair_features(prob, pairs, seed_xyz, seed_junction, cut: float = 0.5) -> tuple:
+    """(X, i, j): 17 features (m, 17) of the m seed pairs i < j of one cloud that `pairs` (S, S) scores, from `prob` (S, S) the affinity,
+    `seed_xyz` (S, 3) and `seed_junction` (S,) the junction logit at each seed. Each feature is the same for (i, j) as for (j, i)."""
+    P, pr = torch.as_tensor(np.asarray(prob, np.float32)), torch.as_tensor(np.asarray(pairs, bool)).clone()
+    x, jn = torch.as_tensor(np.asarray(seed_xyz, np.float32)), torch.as_tensor(np.asarray(seed_junction, np.float32))
+    pr.fill_diagonal_(False)
+    A = torch.where(pr, P, 0.0)                                   # the affinity of the scored pairs, 0 elsewhere
+    i, j = torch.triu(pr, 1).nonzero(as_tuple=True)
+    k, p, d = torch.arange(len(i)), A[i, j], x[j] - x[i]
+    Ai, Aj = A[i].clone(), A[j].clone(); Ai[k, j] = 0; Aj[k, i] = 0   # each seed's other pairs
+    bi, bj = Ai.amax(1), Aj.amax(1)                               # its best other partner
+    ri, rj = (Ai > p[:, None]).sum(1).float(), (Aj > p[:, None]).sum(1).float()   # partners it prefers to this one
+    hi, hj = (Ai > cut).sum(1).float(), (Aj > cut).sum(1).float() # its other confident partners
+    deg = pr.sum(1).float()
+    lo, hi_ = torch.minimum, torch.maximum
+    X = torch.stack([p, d.norm(dim=1), d[:, 2].abs(), d[:, :2].norm(dim=1), lo(jn[i], jn[j]), hi_(jn[i], jn[j]), lo(bi, bj), hi_(bi, bj),
+                     lo(A[i], A[j]).amax(1), (A[i] * A[j]).sum(1), (pr[i] & pr[j]).sum(1).float(), lo(ri, rj), hi_(ri, rj), lo(hi, hj), hi_(hi, hj),
+                     (A[i].sum(1) + A[j].sum(1)) / (deg[i] + deg[j]).clamp_min(1), p - hi_(bi, bj)], 1)
+    return X, i, j
+
+class PairContext(nn.Module):
+    "An MLP from `pair_features` to a new affinity logit per scored pair; the features are standardised by the training set's mean and spread."
+    def __init__(self, width: int = 64):
+        super().__init__()
+        self.net = nn.Sequential(mlp([N_PAIR_FEATURES, width, width]), nn.Linear(width, 1))
+        self.register_buffer("mean", torch.zeros(N_PAIR_FEATURES)); self.register_buffer("std", torch.ones(N_PAIR_FEATURES))
+
+    def forward(self, X): return self.net((X - self.mean) / self.std)[:, 0]
+
+    @torch.no_grad()
+    def refine(self, prob, pairs, seed_xyz, seed_junction) -> np.ndarray:
+        "(S, S) `prob` with the affinity of every scored pair off the diagonal replaced by this MLP's (symmetric)."
+        X, i, j = pair_features(prob, pairs, seed_xyz, seed_junction)
+        out = np.array(prob, np.float32)
+        if len(i): q = torch.sigmoid(self(X)).numpy(); out[i, j] = q; out[j, i] = q
+        return out
+
+def refine_pairs(context: PairContext, o: dict) -> dict:
+    "`predict_seeds`'s outputs `o` with `affinity` and `prob` refined by `context` (the seeds' junction logits taken from `o`)."
+    a = context.refine(o["affinity"], o["pairs"], o["seed_xyz"], o["junction"][o["seed_idx"]])
+    return dict(o, affinity=a, prob=a * o["pairs"])
 
 # %% ../nbs/09a_partnet.ipynb #b467cf8e
 def partnet_targets(out: dict, part: torch.Tensor) -> dict:
@@ -297,10 +346,11 @@ def _turn(q, r: int, passes: int):
     return q @ R.T
 
 @torch.no_grad()
-def predict_seeds(model: TreePartNet, q, seed: int = 0, tta: int = 1) -> dict:
+def predict_seeds(model: TreePartNet, q, seed: int = 0, tta: int = 1, context: bool = True) -> dict:
     """The network's outputs for one normalised cloud `q` (n, 3) as numpy: `seed_xyz`, `seed_idx`, `pairs` (scored),
     `affinity` (all pairs), `prob` (the affinity on the scored pairs, 0 elsewhere), `fine` (the seed of each point), `junction` (logit per point),
-    `passes`. With `tta` > 1 the cloud is also seen turned about z (odd passes mirrored) and the outputs are averaged."""
+    `passes`. With `tta` > 1 the cloud is also seen turned about z (odd passes mirrored) and the outputs are averaged; then, if the model
+    has a `PairContext` and `context` is on, it takes a second look at each pair."""
     if not isinstance(tta, (int, np.integer)) or tta < 1: raise TreebookError(f"tta must be a whole number >= 1, got {tta!r}")
     x = torch.as_tensor(np.asarray(q, np.float32))[None]
     model.eval()
@@ -316,9 +366,10 @@ def predict_seeds(model: TreePartNet, q, seed: int = 0, tta: int = 1) -> dict:
         passes += 1
     pairs = first["pairs"][0]
     knn = first["knn"][0]
-    return dict(seed_xyz=first["seed_xyz"][0].numpy(), seed_idx=first["seed_idx"][0].numpy(), pairs=pairs.numpy(),
-                affinity=(prob / passes).numpy(), prob=(prob / passes * pairs).numpy(), fine=knn.gather(-1, fine.argmax(-1, keepdim=True))[:, 0].numpy(),
-                junction=(junction / passes).numpy(), passes=passes)
+    o = dict(seed_xyz=first["seed_xyz"][0].numpy(), seed_idx=first["seed_idx"][0].numpy(), pairs=pairs.numpy(),
+             affinity=(prob / passes).numpy(), prob=(prob / passes * pairs).numpy(), fine=knn.gather(-1, fine.argmax(-1, keepdim=True))[:, 0].numpy(),
+             junction=(junction / passes).numpy(), passes=passes)
+    return refine_pairs(model.context, o) if context and model.cfg.pair_context else o
 
 @torch.no_grad()
 def segment(model: TreePartNet, points, seed: int = 0, threshold: float | None = None, neighbours: int | None = None,
@@ -421,3 +472,29 @@ def som_clusters(points, n_clusters: int, iterations: int = 20_000, sigma: float
     som.train_random(p, int(iterations))
     near = cKDTree(som.get_weights().reshape(-1, p.shape[1])).query(p)[1]
     return np.unique(near, return_inverse=True)[1].reshape(-1)
+
+# %% ../nbs/09a_partnet.ipynb #9bef5ba9
+def train_pair_context(samples, epochs: int = 40, lr: float = 3e-3, batch: int = 2048, width: int = 64, seed: int = 0, progress: bool = True) -> tuple:
+    """(`PairContext` in eval mode, last minibatch loss) fitted to `samples`: one dict per cloud of the network's own outputs (`prob`, `pairs`,
+    `seed_xyz`, `seed_junction`, as in `pair_features`) and the true part of each seed (`seed_part`, below 0 for none)."""
+    Xs, ys = [], []
+    for s in samples:
+        X, i, j = pair_features(s["prob"], s["pairs"], s["seed_xyz"], s["seed_junction"])
+        sp = torch.as_tensor(np.asarray(s["seed_part"]))
+        ok = (sp[i] >= 0) & (sp[j] >= 0)
+        Xs.append(X[ok]); ys.append((sp[i] == sp[j])[ok].float())
+    X, y = (torch.cat(Xs), torch.cat(ys)) if Xs else (torch.zeros(0, N_PAIR_FEATURES), torch.zeros(0))
+    if len(y) == 0 or y.min() == y.max(): raise TreebookError(f"train_pair_context needs scored pairs of both kinds, one branch and two; got {int(y.sum())} of {len(y)} one branch")
+    torch.manual_seed(seed); g = torch.Generator().manual_seed(seed)
+    ctx = PairContext(width)
+    ctx.mean.copy_(X.mean(0)); ctx.std.copy_(X.std(0).clamp_min(1e-6))
+    opt = torch.optim.Adam(ctx.parameters(), lr=lr)
+    loss = torch.tensor(float("nan"))
+    for ep in tqdm(range(epochs), desc="pair context", disable=not progress):
+        for group in opt.param_groups: group["lr"] = lr * (0.1 if ep >= 0.7 * epochs else 1.0)
+        perm = torch.randperm(len(y), generator=g)
+        for b in range(0, len(y), batch):
+            ix = perm[b:b + batch]
+            loss = F.binary_cross_entropy_with_logits(ctx(X[ix]), y[ix])
+            opt.zero_grad(); loss.backward(); opt.step()
+    return ctx.eval(), loss.item()
