@@ -6,6 +6,8 @@ The network runs once on scans of new trees (seed --pool-seed, which no network 
 on all but the first --fit-scans of them, and the merging (linkage and threshold, for the best mean merged F1, as train_partnet does) is chosen
 on those first scans. Then every --tests set (SEED:PER_SPECIES, the held-out trees 1000 * SEED + i) is scored twice from the same network
 outputs: as the weights were, at their own merging, and with the pair context, at the new one. Pools and network outputs are cached in --work.
+The record also keeps the best merging of the network alone on the same first scans (network_threshold_fit), chosen the same way: the
+pair context is worth shipping only if it builds better branches there, not only better pair decisions.
 """
 import argparse, json, sys, time
 from dataclasses import replace
@@ -70,7 +72,9 @@ def main():
     ctx, loss = train_pair_context(samples(outs[a.fit_scans:]), epochs=a.epochs, seed=a.seed)
     refine = lambda os: [refine_pairs(ctx, o) for o in os]
     linkage, threshold, fit = choose_merging(refine(outs[:a.fit_scans]), LINKAGES)
-    print(f"merging with the pair context: {linkage} at {threshold} (mean merged F1 {fit[f'{linkage}@{threshold:.2f}']:.3f} on {a.fit_scans} new scans)")
+    net_fit = choose_merging(outs[:a.fit_scans], LINKAGES)[2]   # the network alone, chosen the same way: is the context worth having?
+    best = lambda f: max(f.values())
+    print(f"merging with the pair context: {linkage} at {threshold}; best mean merged F1 on the {a.fit_scans} new scans {best(fit):.4f} with it, {best(net_fit):.4f} without")
     tests = {}
     for seed, per in a.tests:
         test = load_or_make_pool(work / f"test_{seed}_{per}.npz", n_per_species=per, seed=seed, n_points=pool_points, desc=f"test trees {seed}")
@@ -84,7 +88,7 @@ def main():
     commit = provenance.commit(short=True)
     command = "python scripts/train_pair_context.py " + " ".join(sys.argv[1:])
     meta = dict(weights=a.weights or "shipped", pool_seed=a.pool_seed, scans=len(pool), fit_scans=a.fit_scans, epochs=a.epochs, loss=loss,
-                pairs_threshold_fit=fit, threshold=threshold, linkage=linkage, network_threshold=base.threshold, network_linkage=base.linkage,
+                threshold_fit=fit, network_threshold_fit=net_fit, threshold=threshold, linkage=linkage, network_threshold=base.threshold, network_linkage=base.linkage,
                 minutes=round((time.time() - t0) / 60, 1), command=command, commit=commit, torch=str(torch.__version__))
     save_partnet(model.eval(), a.out, **meta)
     res = Path(a.results); res.parent.mkdir(exist_ok=True)
