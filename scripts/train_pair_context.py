@@ -5,11 +5,12 @@ Usage: python scripts/train_pair_context.py [--weights W] [--out tmp/partnet-con
 The network runs once on scans of new trees (seed --pool-seed, which no network run trained on): the pair context is fitted to its outputs
 on all but the first --fit-scans of them, and the merging (linkage and threshold, for the best mean merged F1, as train_partnet does) is chosen
 on those first scans. Then every --tests set (SEED:PER_SPECIES, the held-out trees 1000 * SEED + i) is scored twice from the same network
-outputs: as the weights were, at their own merging, and with the pair context, at the new one. Pools and network outputs are cached in --work.
+outputs: as the weights were, at their own merging, and with the pair context, at the new one. Pools and network outputs are cached in --work
+(the outputs with a fingerprint of the network, so other weights are run again).
 The record also keeps the best merging of the network alone on the same first scans (network_threshold_fit), chosen the same way: the
 pair context is worth shipping only if it builds better branches there, not only better pair decisions.
 """
-import argparse, json, sys, time
+import argparse, hashlib, json, sys, time
 from dataclasses import replace
 from pathlib import Path
 
@@ -24,11 +25,23 @@ from treebook.partnet import TreePartNet, load_partnet, refine_pairs, save_partn
 from treebook.tree import _atomic_write
 
 
+def fingerprint(model) -> str:
+    "A short hash of the network's config (as it runs: tta included) and weights, without its pair context: what its outputs depend on."
+    cfg = {k: v for k, v in model.cfg.to_dict().items() if k not in ("threshold", "linkage", "pair_context")}
+    h = hashlib.sha1(json.dumps(cfg, sort_keys=True).encode())
+    for k, v in sorted(model.state_dict().items()):
+        if not k.startswith("context."): h.update(k.encode()); h.update(v.detach().cpu().numpy().tobytes())
+    return h.hexdigest()[:12]
+
+
 def outputs(model, pool, n, path: Path, seed=12345):
-    "`seed_outputs` of the network alone (no pair context), cached at `path` (a list of dicts of arrays)."
-    if path.exists(): return torch.load(path, weights_only=False)
+    "`seed_outputs` of the network alone (no pair context), cached at `path` (a list of dicts of arrays) with the network's fingerprint."
+    key = fingerprint(model)
+    if path.exists():
+        blob = torch.load(path, weights_only=False)
+        if isinstance(blob, dict) and blob.get("network") == key: return blob["outs"]   # (older caches: a bare list, run again)
     outs = seed_outputs(model, pool, n, seed=seed)
-    _atomic_write(path, lambda f: torch.save(outs, f))
+    _atomic_write(path, lambda f: torch.save(dict(network=key, outs=outs), f))
     return outs
 
 
@@ -69,7 +82,10 @@ def main():
     if a.fit_scans >= len(pool): ap.error(f"--fit-scans {a.fit_scans} leaves none of the {len(pool)} scans to learn from")
     t0 = time.time()
     outs = outputs(net, pool, n, work / f"outs_{a.pool_seed}_{a.per_species}.pt")
-    ctx, loss = train_pair_context(samples(outs[a.fit_scans:]), epochs=a.epochs, seed=a.seed)
+    t1 = time.time()
+    learn = samples(outs[a.fit_scans:])
+    ctx, loss = train_pair_context(learn, epochs=a.epochs, seed=a.seed)
+    context_seconds, pairs = time.time() - t1, sum(int((np.triu(s["pairs"], 1) & (s["seed_part"] >= 0)[:, None] & (s["seed_part"] >= 0)[None]).sum()) for s in learn)
     refine = lambda os: [refine_pairs(ctx, o) for o in os]
     linkage, threshold, fit = choose_merging(refine(outs[:a.fit_scans]), LINKAGES)
     net_fit = choose_merging(outs[:a.fit_scans], LINKAGES)[2]   # the network alone, chosen the same way: is the context worth having?
@@ -87,7 +103,8 @@ def main():
     model.load_state_dict({**net.state_dict(), **{f"context.{k}": v for k, v in ctx.state_dict().items()}})
     commit = provenance.commit(short=True)
     command = "python scripts/train_pair_context.py " + " ".join(sys.argv[1:])
-    meta = dict(weights=a.weights or "shipped", pool_seed=a.pool_seed, scans=len(pool), fit_scans=a.fit_scans, epochs=a.epochs, loss=loss,
+    meta = dict(weights=a.weights or "shipped", pool_seed=a.pool_seed, scans=len(pool), fit_scans=a.fit_scans, epochs=a.epochs, loss=loss, pairs=pairs,
+                context_seconds=round(context_seconds, 1), context_weights=sum(p.numel() for p in ctx.parameters()), network=fingerprint(net),
                 threshold_fit=fit, network_threshold_fit=net_fit, threshold=threshold, linkage=linkage, network_threshold=base.threshold, network_linkage=base.linkage,
                 minutes=round((time.time() - t0) / 60, 1), command=command, commit=commit, torch=str(torch.__version__))
     save_partnet(model.eval(), a.out, **meta)

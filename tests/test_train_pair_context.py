@@ -53,3 +53,14 @@ def test_bad_flags(done):
     assert r.returncode == 2 and "SEED:PER_SPECIES" in r.stderr
     r = run(*TINY, "--fit-scans", "12", "--weights", str(done / "net.pt"), "--work", str(done / "work"))
     assert r.returncode == 2 and "leaves none" in r.stderr
+
+
+def test_other_weights_are_run_again(done):
+    "The network outputs cached in --work carry the network's fingerprint: other weights in the same --work are run, not read back."
+    torch.manual_seed(1)
+    save_partnet(TreePartNet(PartNetConfig(n_points=512, width=8, n1=64, n2=32, threshold=0.4, linkage="closure")), done / "net2.pt")
+    r = run(*TINY, "--weights", str(done / "net2.pt"), "--work", str(done / "work"), "--out", str(done / "ctx3.pt"), "--results", str(done / "ctx3.json"))
+    assert r.returncode == 0, r.stderr[-2000:]
+    first, other = (json.loads((done / f).read_text())["network"] for f in ("ctx.json", "ctx3.json"))
+    assert first != other
+    assert torch.load(done / "work" / "test_outs_999_1.pt", weights_only=False)["network"] == other

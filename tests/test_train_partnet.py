@@ -1,9 +1,10 @@
 """scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
 an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one; --test-seed and the
-scores per scan that an evaluation records."""
+scores per scan that an evaluation records; --init weights with a pair context start a run without it."""
 import json, shutil, subprocess, sys
 from pathlib import Path
 import numpy as np, pytest, torch
+from treebook.partnet import PairContext
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ["--points", "512", "--pool-points", "512", "--width", "8", "--batch", "2", "--train-per-species", "1", "--test-per-species", "1",
@@ -85,3 +86,15 @@ def test_evaluation_records_each_scan(base):
         assert len(rec["per_scan"][k]) == rec["test_scans"] == 6
         assert abs(np.mean(rec["per_scan"][k]) - rec["metrics"][k]) < 1e-4
     assert out.exists() and not (out.parent / "partnet.md").exists()   # only weights named partnet.pt get a card
+
+
+def test_init_leaves_a_pair_context_out(base):
+    "Weights with a pair context (scripts/train_pair_context.py) can start a run: the context fits the old network, so it is dropped."
+    work, init = base
+    blob = torch.load(init, weights_only=False)
+    cfg = dict(blob["config"], pair_context=True)
+    state = {**blob["state"], **{f"context.{k}": v for k, v in PairContext().state_dict().items()}}
+    torch.save(dict(config=cfg, state=state), work / "init_ctx.pt")
+    r = run(*SMALL, "--steps", "1", "--work", str(pools_in(work, "ctxinit")), "--init", str(work / "init_ctx.pt"))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "its pair context is left out" in r.stdout and "fresh: nothing" in r.stdout
