@@ -52,8 +52,10 @@ def samples(outs):
 
 
 def tests_arg(s):
-    try: return [tuple(int(v) for v in t.split(":")) for t in s.split(",")]
-    except ValueError: raise argparse.ArgumentTypeError(f"--tests wants SEED:PER_SPECIES,..., got {s!r}") from None
+    try: sets = [tuple(int(v) for v in t.split(":")) for t in s.split(",")]
+    except ValueError: sets = None
+    if not sets or any(len(t) != 2 or t[1] < 1 for t in sets): raise argparse.ArgumentTypeError(f"--tests wants SEED:PER_SPECIES,... with PER_SPECIES >= 1, got {s!r}")
+    return sets
 
 
 def main():
@@ -70,7 +72,7 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--threads", type=int, default=2)
     a = ap.parse_args()
-    if a.per_species < 1 or a.epochs < 1: ap.error("--per-species and --epochs must be at least 1")
+    if min(a.per_species, a.epochs, a.fit_scans) < 1: ap.error("--per-species, --epochs and --fit-scans must be at least 1")
     torch.set_num_threads(a.threads)
     work = Path(a.work); work.mkdir(parents=True, exist_ok=True)
     net = load_partnet(a.weights)
@@ -96,9 +98,9 @@ def main():
         test = load_or_make_pool(work / f"test_{seed}_{per}.npz", n_per_species=per, seed=seed, n_points=pool_points, desc=f"test trees {seed}")
         o = outputs(net, test, n, work / f"test_outs_{seed}_{per}.pt")
         rows = {"network": scan_scores(o, base.threshold, base.linkage), "with context": scan_scores(refine(o), threshold, linkage)}
-        tests[f"{seed}x{per}"] = {k: dict(metrics=mean_scores(r), per_scan={s: [round(x[s], 5) for x in r] for s in ("aff_f1", "f1", "nmi")})
-                                  for k, r in rows.items()}
-        print(f"{seed}x{per}: affinity F1 {tests[f'{seed}x{per}']['network']['metrics']['aff_f1']:.4f} -> {tests[f'{seed}x{per}']['with context']['metrics']['aff_f1']:.4f}")
+        t = tests[f"{seed}x{per}"] = {k: dict(metrics=mean_scores(r), per_scan={s: [round(x[s], 5) for x in r] for s in ("aff_f1", "f1", "nmi")})
+                                      for k, r in rows.items()}
+        print(f"{seed}x{per}: affinity F1 {t['network']['metrics']['aff_f1']:.4f} -> {t['with context']['metrics']['aff_f1']:.4f}")
     model = TreePartNet(replace(base, pair_context=True, threshold=threshold, linkage=linkage))
     model.load_state_dict({**net.state_dict(), **{f"context.{k}": v for k, v in ctx.state_dict().items()}})
     commit = provenance.commit(short=True)

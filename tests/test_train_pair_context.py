@@ -49,8 +49,11 @@ def test_a_held_context_is_replaced(done):
 
 
 def test_bad_flags(done):
-    r = run("--tests", "999-10")
-    assert r.returncode == 2 and "SEED:PER_SPECIES" in r.stderr
+    for bad in ("999-10", "999:0", "999:1:2"):
+        r = run("--tests", bad)
+        assert r.returncode == 2 and "SEED:PER_SPECIES" in r.stderr, bad
+    r = run("--fit-scans", "0")
+    assert r.returncode == 2 and "at least 1" in r.stderr
     r = run(*TINY, "--fit-scans", "12", "--weights", str(done / "net.pt"), "--work", str(done / "work"))
     assert r.returncode == 2 and "leaves none" in r.stderr
 
