@@ -235,12 +235,12 @@ def pair_features(prob, pairs, seed_xyz, seed_junction, cut: float = 0.5) -> tup
     Ai, Aj = A[i].clone(), A[j].clone(); Ai[k, j] = 0; Aj[k, i] = 0   # each seed's other pairs
     bi, bj = Ai.amax(1), Aj.amax(1)                               # its best other partner
     ri, rj = (Ai > p[:, None]).sum(1).float(), (Aj > p[:, None]).sum(1).float()   # partners it prefers to this one
-    hi, hj = (Ai > cut).sum(1).float(), (Aj > cut).sum(1).float() # its other confident partners
+    ci, cj = (Ai > cut).sum(1).float(), (Aj > cut).sum(1).float() # its other confident partners
     deg = pr.sum(1).float()
-    lo, hi_ = torch.minimum, torch.maximum
-    X = torch.stack([p, d.norm(dim=1), d[:, 2].abs(), d[:, :2].norm(dim=1), lo(jn[i], jn[j]), hi_(jn[i], jn[j]), lo(bi, bj), hi_(bi, bj),
-                     lo(A[i], A[j]).amax(1), (A[i] * A[j]).sum(1), (pr[i] & pr[j]).sum(1).float(), lo(ri, rj), hi_(ri, rj), lo(hi, hj), hi_(hi, hj),
-                     (A[i].sum(1) + A[j].sum(1)) / (deg[i] + deg[j]).clamp_min(1), p - hi_(bi, bj)], 1)
+    lo, hi = torch.minimum, torch.maximum
+    X = torch.stack([p, d.norm(dim=1), d[:, 2].abs(), d[:, :2].norm(dim=1), lo(jn[i], jn[j]), hi(jn[i], jn[j]), lo(bi, bj), hi(bi, bj),
+                     lo(A[i], A[j]).amax(1), (A[i] * A[j]).sum(1), (pr[i] & pr[j]).sum(1).float(), lo(ri, rj), hi(ri, rj), lo(ci, cj), hi(ci, cj),
+                     (A[i].sum(1) + A[j].sum(1)) / (deg[i] + deg[j]).clamp_min(1), p - hi(bi, bj)], 1)
     return X, i, j
 
 class PairContext(nn.Module):
