@@ -14,14 +14,13 @@ import argparse, hashlib, json, sys, time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 import torch
 
 root = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(root)); sys.path.insert(0, str(root / "scripts"))
 import provenance
 from train_partnet import LINKAGES, choose_merging, load_or_make_pool, mean_scores, scan_scores, seed_outputs
-from treebook.partnet import TreePartNet, load_partnet, refine_pairs, save_partnet, train_pair_context
+from treebook.partnet import TreePartNet, load_partnet, network_state, refine_pairs, save_partnet, train_pair_context
 from treebook.tree import _atomic_write
 
 
@@ -29,8 +28,7 @@ def fingerprint(model) -> str:
     "A short hash of the network's config (as it runs: tta included) and weights, without its pair context: what its outputs depend on."
     cfg = {k: v for k, v in model.cfg.to_dict().items() if k not in ("threshold", "linkage", "pair_context")}
     h = hashlib.sha1(json.dumps(cfg, sort_keys=True).encode())
-    for k, v in sorted(model.state_dict().items()):
-        if not k.startswith("context."): h.update(k.encode()); h.update(v.detach().cpu().numpy().tobytes())
+    for k, v in sorted(network_state(model.state_dict()).items()): h.update(k.encode()); h.update(v.detach().cpu().numpy().tobytes())
     return h.hexdigest()[:12]
 
 
@@ -43,12 +41,6 @@ def outputs(model, pool, n, path: Path, seed=12345):
     outs = seed_outputs(model, pool, n, seed=seed)
     _atomic_write(path, lambda f: torch.save(dict(network=key, outs=outs), f))
     return outs
-
-
-def samples(outs):
-    "`train_pair_context`'s input from `seed_outputs`."
-    return [dict(prob=o["affinity"], pairs=o["pairs"], seed_xyz=o["seed_xyz"], seed_junction=o["junction"][o["seed_idx"]], seed_part=o["seed_part"])
-            for o in outs]
 
 
 def tests_arg(s):
@@ -78,16 +70,15 @@ def main():
     net = load_partnet(a.weights)
     base = replace(net.cfg, pair_context=False)
     if net.cfg.pair_context:
-        plain = TreePartNet(base); plain.load_state_dict({k: v for k, v in net.state_dict().items() if not k.startswith("context.")}); net = plain.eval()
+        plain = TreePartNet(base); plain.load_state_dict(network_state(net.state_dict())); net = plain.eval()
     n, pool_points = base.n_points, 2 * base.n_points
     pool = load_or_make_pool(work / f"pool_{a.pool_seed}_{a.per_species}.npz", n_per_species=a.per_species, seed=a.pool_seed, n_points=pool_points, desc="new trees")
     if a.fit_scans >= len(pool): ap.error(f"--fit-scans {a.fit_scans} leaves none of the {len(pool)} scans to learn from")
     t0 = time.time()
     outs = outputs(net, pool, n, work / f"outs_{a.pool_seed}_{a.per_species}.pt")
     t1 = time.time()
-    learn = samples(outs[a.fit_scans:])
-    ctx, loss = train_pair_context(learn, epochs=a.epochs, seed=a.seed)
-    context_seconds, pairs = time.time() - t1, sum(int((np.triu(s["pairs"], 1) & (s["seed_part"] >= 0)[:, None] & (s["seed_part"] >= 0)[None]).sum()) for s in learn)
+    ctx, learnt = train_pair_context(outs[a.fit_scans:], epochs=a.epochs, seed=a.seed)   # seed_outputs' dicts are what it reads
+    context_seconds = time.time() - t1
     refine = lambda os: [refine_pairs(ctx, o) for o in os]
     linkage, threshold, fit = choose_merging(refine(outs[:a.fit_scans]), LINKAGES)
     net_fit = choose_merging(outs[:a.fit_scans], LINKAGES)[2]   # the network alone, chosen the same way: is the context worth having?
@@ -105,7 +96,7 @@ def main():
     model.load_state_dict({**net.state_dict(), **{f"context.{k}": v for k, v in ctx.state_dict().items()}})
     commit = provenance.commit(short=True)
     command = "python scripts/train_pair_context.py " + " ".join(sys.argv[1:])
-    meta = dict(weights=a.weights or "shipped", pool_seed=a.pool_seed, scans=len(pool), fit_scans=a.fit_scans, epochs=a.epochs, loss=loss, pairs=pairs,
+    meta = dict(weights=a.weights or "shipped", pool_seed=a.pool_seed, scans=len(pool), fit_scans=a.fit_scans, epochs=a.epochs, **learnt,
                 context_seconds=round(context_seconds, 1), context_weights=sum(p.numel() for p in ctx.parameters()), network=fingerprint(net),
                 threshold_fit=fit, network_threshold_fit=net_fit, threshold=threshold, linkage=linkage, network_threshold=base.threshold, network_linkage=base.linkage,
                 minutes=round((time.time() - t0) / 60, 1), command=command, commit=commit, torch=str(torch.__version__))

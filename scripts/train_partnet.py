@@ -21,7 +21,7 @@ from treebook.tree import _atomic_write
 from treebook.botany import SPECIES, grow
 from treebook.scan import scan
 from treebook.partnet import (LINKAGES, PartNetConfig, TreePartNet, affinity_scores, augment, branch_chains, cluster_scores, merge_scores,
-                              merge_seeds, normalize_points, partnet_loss, point_pair_scores, predict_seeds, save_partnet)
+                              merge_seeds, network_state, normalize_points, partnet_loss, point_pair_scores, predict_seeds, save_partnet)
 
 
 def scan_job(job):
@@ -201,8 +201,9 @@ def main():
         theirs = PartNetConfig.from_dict(src["config"])
         if replace(theirs, n_points=cfg.n_points, pair_term=cfg.pair_term, threshold=cfg.threshold, linkage=cfg.linkage, tta=cfg.tta, junction_seeds=cfg.junction_seeds,
                    patch_term=cfg.patch_term, patch_points=cfg.patch_points, pair_context=cfg.pair_context) != cfg: sys.exit(f"{a.init} has another config ({theirs}); --init needs the same sizes")
-        if any(k.startswith("context.") for k in src["state"]):   # a pair context fits the network it was trained on: it is not carried over
-            src["state"] = {k: v for k, v in src["state"].items() if not k.startswith("context.")}
+        net_only = network_state(src["state"])
+        if len(net_only) < len(src["state"]):   # a pair context fits the network it was trained on: it is not carried over
+            src["state"] = net_only
             print(f"{a.init}: its pair context is left out (train a new one with scripts/train_pair_context.py)")
         missing, unexpected = model.load_state_dict(src["state"], strict=False)
         if unexpected: sys.exit(f"{a.init} holds weights this model lacks: {unexpected}")

@@ -25,9 +25,9 @@ from .pointnet2 import PointNet2, gather, mlp
 # %% auto #0
 __all__ = ['N_PAIR_FEATURES', 'LINKAGES', 'PARTNET_FORMAT', 'WEIGHTS', 'branch_chains', 'normalize_points', 'augment',
            'training_example', 'PartNetConfig', 'neighbour_pairs', 'PairPatch', 'TreePartNet', 'pair_features',
-           'PairContext', 'refine_pairs', 'partnet_targets', 'focal_loss', 'partnet_loss', 'merge_seeds',
-           'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores', 'point_pair_scores',
-           'cluster_scores', 'affinity_scores', 'som_clusters', 'train_pair_context']
+           'PairContext', 'refine_pairs', 'network_state', 'partnet_targets', 'focal_loss', 'partnet_loss',
+           'merge_seeds', 'predict_seeds', 'segment', 'save_partnet', 'load_partnet', 'merge_scores',
+           'point_pair_scores', 'cluster_scores', 'affinity_scores', 'som_clusters', 'train_pair_context']
 
 # %% ../nbs/09a_partnet.ipynb #dfcf181e
 def branch_chains(tree: Tree) -> np.ndarray:
@@ -260,10 +260,18 @@ class PairContext(nn.Module):
         if len(i): q = torch.sigmoid(self(X)).numpy(); out[i, j] = q; out[j, i] = q
         return out
 
+def _context_inputs(o: dict) -> tuple:
+    "`pair_features`'s inputs from `predict_seeds`'s outputs `o`: the affinity, the scored pairs, the seeds and their junction logits."
+    return o["affinity"], o["pairs"], o["seed_xyz"], o["junction"][o["seed_idx"]]
+
 def refine_pairs(context: PairContext, o: dict) -> dict:
-    "`predict_seeds`'s outputs `o` with `affinity` and `prob` refined by `context` (the seeds' junction logits taken from `o`)."
-    a = context.refine(o["affinity"], o["pairs"], o["seed_xyz"], o["junction"][o["seed_idx"]])
+    "`predict_seeds`'s outputs `o` with `affinity` and `prob` refined by `context`."
+    a = context.refine(*_context_inputs(o))
     return dict(o, affinity=a, prob=a * o["pairs"])
+
+def network_state(state: dict) -> dict:
+    "A TreePartNet `state_dict` without its pair context: the network alone, whose outputs a pair context is trained on."
+    return {k: v for k, v in state.items() if not k.startswith("context.")}
 
 # %% ../nbs/09a_partnet.ipynb #b467cf8e
 def partnet_targets(out: dict, part: torch.Tensor) -> dict:
@@ -474,13 +482,13 @@ def som_clusters(points, n_clusters: int, iterations: int = 20_000, sigma: float
     return np.unique(near, return_inverse=True)[1].reshape(-1)
 
 # %% ../nbs/09a_partnet.ipynb #9bef5ba9
-def train_pair_context(samples, epochs: int = 40, lr: float = 3e-3, batch: int = 2048, width: int = 64, seed: int = 0, progress: bool = True) -> tuple:
-    """(`PairContext` in eval mode, last minibatch loss) fitted to `samples`: one dict per cloud of the network's own outputs (`prob`, `pairs`,
-    `seed_xyz`, `seed_junction`, as in `pair_features`) and the true part of each seed (`seed_part`, below 0 for none)."""
+def train_pair_context(outs, epochs: int = 40, lr: float = 3e-3, batch: int = 2048, width: int = 64, seed: int = 0, progress: bool = True) -> tuple:
+    """(`PairContext` in eval mode, dict of the last minibatch's `loss` and the number of `pairs` learnt from) fitted to `outs`: per cloud,
+    the network's own outputs (`predict_seeds`, without a pair context) and the true part of each seed (`seed_part`, below 0 for none)."""
     Xs, ys = [], []
-    for s in samples:
-        X, i, j = pair_features(s["prob"], s["pairs"], s["seed_xyz"], s["seed_junction"])
-        sp = torch.as_tensor(np.asarray(s["seed_part"]))
+    for o in outs:
+        X, i, j = pair_features(*_context_inputs(o))
+        sp = torch.as_tensor(np.asarray(o["seed_part"]))
         ok = (sp[i] >= 0) & (sp[j] >= 0)
         Xs.append(X[ok]); ys.append((sp[i] == sp[j])[ok].float())
     X, y = (torch.cat(Xs), torch.cat(ys)) if Xs else (torch.zeros(0, N_PAIR_FEATURES), torch.zeros(0))
@@ -497,4 +505,4 @@ def train_pair_context(samples, epochs: int = 40, lr: float = 3e-3, batch: int =
             ix = perm[b:b + batch]
             loss = F.binary_cross_entropy_with_logits(ctx(X[ix]), y[ix])
             opt.zero_grad(); loss.backward(); opt.step()
-    return ctx.eval(), loss.item()
+    return ctx.eval(), dict(loss=loss.item(), pairs=len(y))
