@@ -27,18 +27,44 @@ def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.n
     if np.ptp(p, 0).max() <= 0: raise TreebookError(f"all {len(p)} points of {name} are identical: there is no shape to read")
     return p
 
-def _read_text(path: Path) -> np.ndarray:
-    first = ""
+def _fields(line: str) -> tuple:
+    "(delimiter for `np.loadtxt`, decimal comma?, fields) of one line of a text scan: ';', ',', tab or spaces; '1,5;2,5;3,5' has decimal commas."
+    if ";" in line: d = ";"
+    elif "," in line: d = ","
+    else: d = None
+    f = [x.strip() for x in line.split(d)]
+    comma = d == ";" and any("," in x for x in f)
+    return d, comma, [x.replace(",", ".") for x in f] if comma else f
+
+def _is_number(s: str) -> bool:
+    try: float(s); return True
+    except ValueError: return False
+
+def _read_text(path: Path, look: int = 50) -> np.ndarray:
+    "Rows of numbers of a text scan; leading lines that are not points (names of columns, a .pts point count) are skipped."
+    skip, seen, data = 0, 0, None  # lines before the first point; of those, lines that are not blank or comments
     with open(path, errors="replace") as f:
         for line in f:
-            if line.strip() and not line.lstrip().startswith(("#", "//")): first = line; break
-    if not first: return np.zeros((0, 3))
+            s = line.strip()
+            if s and not s.startswith(("#", "//")):
+                d, comma, fields = _fields(s)
+                if len(fields) >= 3 and all(map(_is_number, fields)): data = (d, comma); break
+                seen += 1
+                if seen >= look: break
+            skip += 1
+    if data is None:
+        if not seen: return np.zeros((0, 3))  # blank lines and comments only
+        raise TreebookError(f"cannot read {path} as rows of numbers: none of its first {seen} line(s) is a point; an .xyz file holds one point a line: x y z [more columns]")
+    d, comma = data
+    src = path
+    if comma:  # decimal commas: read the text with points for commas
+        import io
+        src = io.StringIO(path.read_text(errors="replace").replace(",", "."))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        try: a = np.loadtxt(path, dtype=np.float64, ndmin=2, comments=("#", "//"), delimiter="," if "," in first else None)
+        try: a = np.loadtxt(src, dtype=np.float64, ndmin=2, comments=("#", "//"), delimiter=d, skiprows=skip)
         except ValueError as e:
             raise TreebookError(f"cannot read {path} as rows of numbers ({e}); an .xyz file holds one point a line: x y z [more columns]") from None
-    if a.shape[1] < 3: raise TreebookError(f"{path} has {a.shape[1]} column(s); a point needs x y z")
     return a[:, :3]
 
 def _read_o3d(path: Path) -> np.ndarray:
@@ -49,7 +75,7 @@ def _read_o3d(path: Path) -> np.ndarray:
 def _read_las(path: Path) -> np.ndarray:
     import laspy
     try: las = laspy.read(path)
-    except Exception as e: raise TreebookError(f"cannot read {path} as LAS/LAZ ({type(e).__name__}: {e}); .laz needs `pip install lazrs`") from None
+    except Exception as e: raise TreebookError(f"cannot read {path} as LAS/LAZ ({type(e).__name__}: {e}); .laz also needs `pip install lazrs`") from None
     return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
 
 def _read_npy(path: Path) -> np.ndarray:
