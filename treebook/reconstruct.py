@@ -17,9 +17,9 @@ from .tree import Tree, TreebookError
 from .pointio import read_points
 
 # %% auto #0
-__all__ = ['METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph', 'level_set_skeleton',
-           'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'point_labels', 'wood_points',
-           'reconstruct', 'demo_reconstruct']
+__all__ = ['VOXEL', 'METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph',
+           'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'point_labels',
+           'wood_points', 'reconstruct', 'demo_reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -29,14 +29,18 @@ def _extent(p) -> np.ndarray:
     lo, hi = np.percentile(p[:: max(1, len(p) // 200_000)], [0.1, 99.9], axis=0)
     return np.minimum(hi + 0.1 * (hi - lo), p.max(0)) - np.maximum(lo - 0.1 * (hi - lo), p.min(0))
 
-def voxel_down(points, max_points: int) -> np.ndarray:
-    "`points` thinned on a voxel grid (open3d) until at most `max_points` remain; unchanged if already small enough."
-    if len(points) <= max_points: return points
+VOXEL = 0.003  # the finest voxel of `prepare_points`, as a fraction of the cloud's diagonal (chosen on procedural scans, see "Even density")
+
+def voxel_down(points, max_points: int, min_size: float = 0.0) -> np.ndarray:
+    "`points` thinned on a voxel grid (open3d), voxels at least `min_size` wide and grown until at most `max_points` remain; unchanged if already small enough and `min_size` is 0."
+    big = len(points) > max_points
+    if not big and not min_size > 0: return points
     import open3d as o3d
     pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     ext = _extent(points)
     vol = np.prod(np.maximum(ext, 1e-9 * np.linalg.norm(ext)))
-    v = max((vol / max_points) ** (1 / 3) * 0.3, np.linalg.norm(ext) * 1e-4)
+    v = max((vol / max_points) ** (1 / 3) * 0.3, np.linalg.norm(ext) * 1e-4) if big else 0.0
+    v = max(v, min_size)
     for _ in range(60):
         q = np.asarray(pc.voxel_down_sample(v).points)
         if len(q) <= max_points: return q
@@ -108,14 +112,15 @@ def remove_ground(points, seed: int = 0, min_share: float = 0.05, max_tilt: floa
     gone = (p - c0) @ n + e < thick                             # on the plane, and everything below it (outliers under the ground)
     return (p[~gone], gone) + (((n, e - float(n @ c0)),) if return_plane else ())
 
-def prepare_points(src, up: str = "z", max_points: int = 60_000, ground: bool = True, seed: int = 0) -> np.ndarray:
-    "Points (m, 3) float64 ready to reconstruct: read and checked, not planar, thinned to `max_points`, ground removed."
+def prepare_points(src, up: str = "z", max_points: int = 60_000, ground: bool = True, seed: int = 0, voxel: float = VOXEL) -> np.ndarray:
+    "Points (m, 3) float64 ready to reconstruct: read and checked, not planar, evened on voxels `voxel` x the diagonal wide and thinned to `max_points`, ground removed."
     p = read_points(src, up=up)
     c = p - p.mean(0)
     sv = np.linalg.svd(c[:: max(1, len(c) // 20000)], compute_uv=False)
     if sv[2] <= 1e-3 * sv[0]: raise TreebookError(f"the {len(p)} points lie on a plane (thickness {sv[2] / sv[0]:.1e} of their extent): there is no tree to reconstruct")
     if not isinstance(max_points, (int, np.integer)) or max_points < 100: raise TreebookError(f"max_points must be a whole number >= 100, got {max_points!r}")
-    p = voxel_down(p, max_points)
+    if not (isinstance(voxel, (int, float, np.integer, np.floating)) and 0 <= voxel < 0.05): raise TreebookError(f"voxel must be a fraction of the diagonal in [0, 0.05), got {voxel!r}")
+    p = voxel_down(p, max_points, min_size=voxel * float(np.linalg.norm(_extent(p))))
     if ground:
         q, gone = remove_ground(p, seed=seed)
         if len(q) < 10: raise TreebookError(f"only {len(q)} points are left after removing the ground plane: is this a scan of bare ground?")
@@ -370,12 +375,12 @@ def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
 METHODS = ("partnet", "classic")
 
 def reconstruct(points, method: str = "partnet", up: str = "z", foliage: bool = False, seed: int = 0, bin_size: float | None = None,
-                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False):
+                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL):
     "A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units."
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     t0 = time.perf_counter()
     raw = read_points(points, up=up)
-    p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed)
+    p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
     if foliage:
         w = wood_points(p)
         if w.mean() >= 0.2: p = p[w]
