@@ -296,7 +296,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_generate)
     def scan_args(s):
-        s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz or .npy")
+        s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
         s.add_argument("--grid", type=int, default=128, help="voxel grid size, a power of two >= 8 (default: 128)")
         s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
         s.add_argument("--symmetrize", action="store_true", help="mirror the scan about the vertical plane through the root first")
@@ -320,7 +320,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_propagate)
     s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan", description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic skeleton (classic), then join one connected tree in the scan's frame and units.")
-    s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz or .npy")
+    s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
     s.add_argument("--out", required=True, help="tree file (.npz or .json)")
     s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply)")
     s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges)")
@@ -359,7 +359,7 @@ def build_parser() -> argparse.ArgumentParser:
     sampling_args(s, "elm")
     s.set_defaults(func=cmd_complete)
     for name, kind, what in (("sketch2tree", "sketch", "a 2D sketch: a .json list of [x0, y0, x1, y1] segments or an .svg of lines"),
-                             ("points2tree", "points", "a point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz or .npy"),
+                             ("points2tree", "points", "a point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy"),
                              ("image2tree", "image", "a silhouette image (.png or .jpg)")):
         s = sub.add_parser(name, help=f"a tree from {what.split(':')[0]}", description=f"Sample trees conditioned on {what}.")
         s.add_argument("input", help=what)
