@@ -29,7 +29,7 @@ def _extent(p) -> np.ndarray:
     lo, hi = np.percentile(p[:: max(1, len(p) // 200_000)], [0.1, 99.9], axis=0)
     return np.minimum(hi + 0.1 * (hi - lo), p.max(0)) - np.maximum(lo - 0.1 * (hi - lo), p.min(0))
 
-VOXEL = 0.003  # the finest voxel of `prepare_points`, as a fraction of the cloud's diagonal (chosen on procedural scans, see "Even density")
+VOXEL = 0.0025  # the finest voxel of `prepare_points`, as a fraction of the cloud's diagonal (chosen on procedural scans, see "Even density")
 
 def voxel_down(points, max_points: int, min_size: float = 0.0) -> np.ndarray:
     "`points` thinned on a voxel grid (open3d), voxels at least `min_size` wide and grown until at most `max_points` remain; unchanged if already small enough and `min_size` is 0."
