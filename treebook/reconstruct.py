@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -17,9 +18,9 @@ from .tree import Tree, TreebookError
 from .pointio import read_points
 
 # %% auto #0
-__all__ = ['VOXEL', 'METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph',
+__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph',
            'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'point_labels',
-           'wood_points', 'reconstruct', 'demo_reconstruct']
+           'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -372,18 +373,30 @@ def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
     ev = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", nb, nb))[:, ::-1]
     return (ev[:, 0] - ev[:, 1]) / np.maximum(ev[:, 0], 1e-18) >= min_linearity
 
+FOLIAGE = ("network", "geometric")
+
+def wood_mask(points, foliage=True, weights=None, seed: int = 0) -> np.ndarray:
+    "Mask of the wood among `points`: `foliage` 'network' (the wood/leaf PointNet++ of chapter 09c, at `weights` or the shipped ones), 'geometric' (`wood_points`), or True: the network if its weights exist."
+    from treebook.foliage import WEIGHTS as FW, load_foliage, wood_probability
+    how = ("network" if Path(weights or FW).exists() else "geometric") if foliage is True else foliage
+    if how not in FOLIAGE: raise TreebookError(f"foliage must be True, False or one of {', '.join(FOLIAGE)}, got {foliage!r}")
+    if how == "geometric": return wood_points(points)
+    return wood_probability(load_foliage(weights), points, seed=seed) >= 0.5
+
 METHODS = ("partnet", "classic")
 
-def reconstruct(points, method: str = "partnet", up: str = "z", foliage: bool = False, seed: int = 0, bin_size: float | None = None,
-                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL):
+def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
+                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
+                foliage_weights=None):
     "A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units."
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     t0 = time.perf_counter()
     raw = read_points(points, up=up)
     p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
-    if foliage:
-        w = wood_points(p)
-        if w.mean() >= 0.2: p = p[w]
+    if foliage is not False:
+        w = wood_mask(p, foliage, foliage_weights, seed)
+        if w.sum() >= max(100, 0.05 * len(p)): p = p[w]
+        else: warnings.warn(f"only {int(w.sum())} of {len(p)} points look like wood: the leaves were kept (is this a leafy scan?)")
     labels, seg = None, None
     if method == "partnet":
         from treebook.partnet import load_partnet, segment
