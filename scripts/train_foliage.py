@@ -1,6 +1,6 @@
 """Train and ship the wood/leaf PointNet++ (chapter 09c) on leafy procedural scans, and measure what it does for reconstruction.
 
-Usage: python scripts/train_foliage.py [--per-species 40] [--test-per-species 5] [--minutes 30] [--steps 6000] [--work tmp/foliage]
+Usage: python scripts/train_foliage.py [--per-species 40] [--test-per-species 5] [--minutes 40] [--steps 3000] [--work tmp/foliage]
                                        [--out treebook/data/weights/foliage.pt] [--results results/foliage.json]
 
 Training scans: trees of seeds 20000 onwards (per species), scanned with leaves at 16,384 points (`foliage.foliage_scan`);
@@ -41,7 +41,7 @@ def pool(path: Path, seeds, desc):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--per-species", type=int, default=40); ap.add_argument("--test-per-species", type=int, default=5)
-    ap.add_argument("--steps", type=int, default=6000); ap.add_argument("--minutes", type=float, default=30.0)
+    ap.add_argument("--steps", type=int, default=3000); ap.add_argument("--minutes", type=float, default=40.0, help="stop early after this long (the planned --steps set the schedule)")
     ap.add_argument("--batch", type=int, default=2); ap.add_argument("--lr", type=float, default=1e-3); ap.add_argument("--width", type=int, default=32)
     ap.add_argument("--skeleton-trees", type=int, default=2, help="held-out trees per species for the skeleton table")
     ap.add_argument("--threads", type=int, default=2); ap.add_argument("--work", default=str(root / "tmp" / "foliage"))
@@ -84,7 +84,7 @@ def main():
                     d = skeleton_distance(tree, truth)
                     rows.append(dict(species=s, seed=seed, cloud=kind, method=m, points=len(info["points"]), chamfer=round(d["chamfer"], 4), hausdorff=round(d["hausdorff"], 3)))
     summary = {f"{k}/{m}": {x: round(float(np.mean([r[x] for r in rows if r["cloud"] == k and r["method"] == m])), 4) for x in ("chamfer", "hausdorff", "points")}
-               for k in ("leafy", "geometric filter", "network", "no leaves") for m in ("classic", "partnet")}
+               for k in ("leafy", "geometric filter", "network", "no leaves") for m in ("classic", "partnet")} if rows else {}
     n_par = sum(p.numel() for p in net.parameters())
     card = f"""# Wood/leaf PointNet++ weights (`foliage.pt`)
 

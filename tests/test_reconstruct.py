@@ -193,3 +193,14 @@ def test_double_surfaces_keep_the_tree():
     without = coverage(triple, tree_mesh(reconstruct(triple, method="classic", voxel=0), sides=12))
     assert without < once - 0.1                     # the copies do cost
     assert once - evened < 0.5 * (once - without)   # the evening wins back more than half of it
+
+
+def test_foliage_flags_and_guard(monkeypatch):
+    "foliage takes True, False, 'network' or 'geometric'; when almost nothing looks like wood the leaves are kept, with a warning."
+    import treebook.reconstruct as R
+    p = scan(example_tree(levels=3, seed=2), n_points=3000, seed=0, noise=0.001, outliers=0.0).points.astype(np.float64)
+    with pytest.raises(TreebookError, match="foliage must be"): reconstruct(p, method="classic", foliage="leaves")
+    monkeypatch.setattr(R, "wood_mask", lambda q, *a, **k: np.arange(len(q)) < 50)   # 50 points of wood: too few
+    with pytest.warns(UserWarning, match="the leaves were kept"):
+        t, info = reconstruct(p, method="classic", foliage=True, return_info=True)
+    assert (t.parent == -1).sum() == 1 and len(info["points"]) > 1000

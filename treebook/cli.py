@@ -230,6 +230,7 @@ for key, name, target, sub in [
         ("species", "a gallery of the procedural species (botany)", "treebook.botany:demo_gallery", ""),
         ("grammar", "a wavelet grammar inferred from a shipped real scan, and three propagated trees", "treebook.wavelet:demo_grammar", "grammar"),
         ("reconstruct", "a real scan reconstructed into a tree (TreePartNet)", "treebook.reconstruct:demo_reconstruct", "reconstruct"),
+        ("foliage", "a leafy scan: wood and leaves told apart, the tree reconstructed from the wood", "treebook.foliage:demo_foliage", "foliage"),
         ("sample", "trees sampled from the shipped elm model (HourglassTree)", "treebook.train:demo_sample", "sample"),
         ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.growth:demo_growth", "growth")]:
     demo_step(key, name)(_lazy_step(target, sub))
@@ -326,7 +327,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges)")
     s.add_argument("--method", default="partnet", choices=["partnet", "classic"], help="neural decomposition or the geodesic baseline (default: partnet)")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
-    s.add_argument("--foliage", action="store_true", help="remove leaf points first")
+    s.add_argument("--foliage", action="store_true", help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     s.set_defaults(func=cmd_reconstruct)
     s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False, description="Train a TreeTransformer (see `treebook train --help`).")

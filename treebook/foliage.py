@@ -20,21 +20,34 @@ FOLIAGE_POINTS = 16384   # points per pass, as the paper's foliage network
 FOLIAGE_FORMAT = 1
 WEIGHTS = Path(__file__).parent / "data" / "weights" / "foliage.pt" if "__file__" in globals() else Path("../treebook/data/weights/foliage.pt")
 
+def point_features(q, k: int = 16) -> np.ndarray:
+    "Six numbers (m, 6) per point of `q` (m, 3) from its `k` nearest neighbours: linearity, planarity, scattering, |z| of the normal, |z| of the main direction, k-th neighbour distance over its median."
+    from scipy.spatial import cKDTree
+    q = np.asarray(q, np.float64)
+    k = min(k, len(q))
+    d, j = cKDTree(q).query(q, k)
+    nb = q[j] - q[j].mean(1, keepdims=True)
+    ev, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", nb, nb))       # ascending
+    ev = np.maximum(ev[:, ::-1], 0); e0 = np.maximum(ev[:, 0], 1e-18)
+    far = d[:, -1] / max(float(np.median(d[:, -1])), 1e-12)
+    return np.column_stack([(ev[:, 0] - ev[:, 1]) / e0, (ev[:, 1] - ev[:, 2]) / e0, ev[:, 2] / e0,
+                            np.abs(vec[:, 2, 0]), np.abs(vec[:, 2, 2]), np.minimum(far, 10)]).astype(np.float32)
+
 class FoliageNet(nn.Module):
-    "PointNet++ (chapter 09) with a per-point head: the logit that a point is wood (not a leaf, not an outlier)."
-    def __init__(self, width: int = 32, n1: int = 512, n2: int = 128, radii1=(0.03, 0.06), radii2=(0.08, 0.16), nsample=(16, 32)):
+    "PointNet++ (chapter 09) fed `point_features`, with a per-point head: the logit that a point is wood (not a leaf, not an outlier)."
+    def __init__(self, width: int = 32, n1: int = 512, n2: int = 128, radii1=(0.03, 0.06), radii2=(0.08, 0.16), nsample=(16, 32), in_features: int = 6):
         super().__init__()
-        self.cfg = dict(width=width, n1=n1, n2=n2, radii1=list(radii1), radii2=list(radii2), nsample=list(nsample))
-        self.backbone = PointNet2(n1, n2, width, 0, radii1, radii2, nsample)
+        self.cfg = dict(width=width, n1=n1, n2=n2, radii1=list(radii1), radii2=list(radii2), nsample=list(nsample), in_features=in_features)
+        self.backbone = PointNet2(n1, n2, width, in_features, radii1, radii2, nsample)
         self.head = nn.Sequential(nn.Linear(self.backbone.out_ch, width), nn.ReLU(inplace=True), nn.Linear(width, 1))
 
-    def forward(self, xyz, seed: int | None = None):
-        "Wood logits (B, N) for points (B, N, 3) in the unit sphere."
-        return self.head(self.backbone(xyz, seed=seed)[3])[..., 0]
+    def forward(self, xyz, features=None, seed: int | None = None):
+        "Wood logits (B, N) for points (B, N, 3) in the unit sphere and their `point_features` (B, N, 6)."
+        return self.head(self.backbone(xyz, features if self.cfg["in_features"] else None, seed=seed)[3])[..., 0]
 
 # %% auto #0
-__all__ = ['FOLIAGE_POINTS', 'FOLIAGE_FORMAT', 'WEIGHTS', 'FoliageNet', 'foliage_scan', 'train_foliage', 'wood_probability',
-           'save_foliage', 'load_foliage']
+__all__ = ['FOLIAGE_POINTS', 'FOLIAGE_FORMAT', 'WEIGHTS', 'point_features', 'FoliageNet', 'foliage_scan', 'train_foliage',
+           'wood_probability', 'save_foliage', 'load_foliage', 'demo_foliage']
 
 # %% ../nbs/09c_foliage.ipynb #356a384e
 def foliage_scan(species: str, seed: int, n_points: int = FOLIAGE_POINTS) -> tuple:
@@ -49,14 +62,14 @@ def foliage_scan(species: str, seed: int, n_points: int = FOLIAGE_POINTS) -> tup
 
 # %% ../nbs/09c_foliage.ipynb #b2d45368
 def _batch(scans, idx, n, seed):
-    xs, ys = [], []
+    xs, fs, ys = [], [], []
     for k, i in enumerate(idx):
         p, w = scans[i]
         rng = np.random.default_rng(seed + k)
         pick = rng.choice(len(p), n, replace=len(p) < n)
         q, _, _ = normalize_points(augment(p[pick], seed=seed + k))
-        xs.append(q); ys.append(w[pick])
-    return torch.from_numpy(np.stack(xs)), torch.from_numpy(np.stack(ys).astype(np.float32))
+        xs.append(q); fs.append(point_features(q)); ys.append(w[pick])
+    return torch.from_numpy(np.stack(xs)), torch.from_numpy(np.stack(fs)), torch.from_numpy(np.stack(ys).astype(np.float32))
 
 def train_foliage(scans, steps: int = 1000, batch: int = 2, n_points: int = FOLIAGE_POINTS, lr: float = 1e-3, seed: int = 0,
                   width: int = 32, checkpoint=None, every: int = 200, minutes: float | None = None, until: int | None = None, progress: bool = True):
@@ -70,11 +83,14 @@ def train_foliage(scans, steps: int = 1000, batch: int = 2, n_points: int = FOLI
     if n_points < net.cfg["n1"]: raise TreebookError(f"n_points must be at least {net.cfg['n1']} (the network's first layer of centres), got {n_points}")
     opt = torch.optim.Adam(net.parameters(), lr)
     start, losses = 0, []
+    run = dict(steps=steps, batch=batch, n_points=n_points, lr=lr, seed=seed, width=width, scans=len(scans))  # what a checkpoint must match
     ck = Path(checkpoint) if checkpoint else None
     if ck is not None and ck.exists():
-        st = torch.load(ck, map_location="cpu", weights_only=False)
+        try: st = torch.load(ck, map_location="cpu", weights_only=False)
+        except Exception as e: raise TreebookError(f"cannot read the checkpoint {ck} ({type(e).__name__}: {e}): delete it to start again") from None
+        if st.get("run") != run: raise TreebookError(f"the checkpoint {ck} is of another run ({st.get('run')}, not {run}): delete it, or give another checkpoint")
         net.load_state_dict(st["net"]); opt.load_state_dict(st["opt"]); start, losses = st["step"], st["losses"]
-    save = lambda s: _atomic_write(ck, lambda f: torch.save(dict(net=net.state_dict(), opt=opt.state_dict(), step=s, losses=losses), f))
+    save = lambda s: _atomic_write(ck, lambda f: torch.save(dict(net=net.state_dict(), opt=opt.state_dict(), step=s, losses=losses, run=run), f))
     rng = np.random.default_rng(seed)
     order = [rng.permutation(len(scans)) for _ in range((steps * batch) // len(scans) + 1)]
     order = np.concatenate(order)
@@ -84,10 +100,10 @@ def train_foliage(scans, steps: int = 1000, batch: int = 2, n_points: int = FOLI
     for step in bar:
         if (minutes is not None and time.time() - t0 > 60 * minutes) or (until is not None and step >= until): break
         for g in opt.param_groups: g["lr"] = lr * (0.1 if step >= 0.8 * steps else 1.0)   # the last fifth at a tenth
-        x, y = _batch(scans, order[step * batch:(step + 1) * batch], n_points, seed * 1_000_003 + step * batch)
-        loss = nn.functional.binary_cross_entropy_with_logits(net(x, seed=step), y)
+        x, f, y = _batch(scans, order[step * batch:(step + 1) * batch], n_points, seed * 1_000_003 + step * batch)
+        loss = nn.functional.binary_cross_entropy_with_logits(net(x, f, seed=step), y)
         opt.zero_grad(); loss.backward(); opt.step()
-        losses.append(float(loss)); done = step + 1
+        losses.append(loss.item()); done = step + 1
         if progress: bar.set_postfix(loss=f"{np.mean(losses[-50:]):.3f}")
         if ck is not None and done % every == 0: save(done)
     if ck is not None: save(done)
@@ -97,20 +113,25 @@ def train_foliage(scans, steps: int = 1000, batch: int = 2, n_points: int = FOLI
 @torch.no_grad()
 def wood_probability(model: FoliageNet, points, n_points: int = FOLIAGE_POINTS, seed: int = 0, batch: int = 4) -> np.ndarray:
     "Probability (m,) that each of `points` (m, 3) is wood, in passes of `n_points`."
-    if n_points < model.cfg["n1"]: raise TreebookError(f"n_points must be at least {model.cfg['n1']} (the network's first layer of centres), got {n_points}")
+    n1 = model.cfg["n1"]
+    if n_points < n1: raise TreebookError(f"n_points must be at least {n1} (the network's first layer of centres), got {n_points}")
     q, _, _ = normalize_points(points)
     m = len(q)
+    if m < n1: raise TreebookError(f"the wood/leaf network needs at least {n1} points, got {m}")
+    n = min(n_points, m)
     rng = np.random.default_rng(seed)
-    k = max(1, -(-m // n_points))
-    idx = np.concatenate([rng.permutation(m), rng.choice(m, k * n_points - m, replace=m < k * n_points - m)]) if k * n_points > m else rng.permutation(m)
-    idx = idx[:k * n_points].reshape(k, n_points)
+    k = -(-m // n)
+    idx = rng.permutation(m)
+    if k * n > m: idx = np.concatenate([idx, rng.choice(m, k * n - m, replace=False)])   # the last pass filled up with points drawn again
+    idx = idx.reshape(k, n)
     logit, cnt = np.zeros(m), np.zeros(m)
     model.eval()
     for a in range(0, k, batch):
         ii = idx[a:a + batch]
-        out = model(torch.from_numpy(q[ii]), seed=seed).numpy()
+        f = np.stack([point_features(q[i]) for i in ii])
+        out = model(torch.from_numpy(q[ii]), torch.from_numpy(f), seed=seed).numpy()
         np.add.at(logit, ii.ravel(), out.ravel()); np.add.at(cnt, ii.ravel(), 1)
-    return 1 / (1 + np.exp(-logit / np.maximum(cnt, 1)))
+    return 1 / (1 + np.exp(-logit / cnt))
 
 def save_foliage(model: FoliageNet, path, **meta) -> Path:
     "Write the weights, config and `meta` of `model` to `path` atomically."
@@ -129,3 +150,23 @@ def load_foliage(path=None) -> FoliageNet:
     model = FoliageNet(**blob["config"])
     model.load_state_dict(blob["state"])
     return model.eval()
+
+# %% ../nbs/09c_foliage.ipynb #b3f5e94f
+def demo_foliage(out_dir, seed: int = 0) -> list:
+    "A leafy procedural tree, its wood found by the shipped network, the tree reconstructed from all points and from the wood: .ply, .npz and a .png; returns the paths."
+    import trimesh
+    from treebook.reconstruct import reconstruct, wood_mask
+    from treebook.render import render, image_grid
+    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
+    p = foliage_scan("tulip", seed=seed)[0].astype(np.float64)
+    wood = wood_mask(p, True, seed=seed)
+    rgb = np.where(wood[:, None], [105, 78, 52], [60, 140, 60]).astype(np.uint8)
+    ply = out / "leafy_scan.ply"
+    _atomic_write(ply, lambda f: f.write(trimesh.PointCloud(p, colors=rgb).export(file_type="ply")))
+    trees = [reconstruct(p, seed=seed), reconstruct(p, seed=seed, foliage=True)]
+    paths = [ply, trees[0].save(out / "tree_all_points.npz"), trees[1].save(out / "tree_wood.npz")]
+    img = image_grid([render(p, view="front", size=(300, 360), colors=rgb / 255, point_size=2.0)] + [render(t, view="front", size=(300, 360)) for t in trees],
+                     ncols=3, labels=[f"scan: {wood.mean():.0%} wood", "from all points", "from the wood"])
+    png = out / "foliage.png"
+    _atomic_write(png, lambda f: img.save(f, format="PNG"))
+    return paths + [png]
