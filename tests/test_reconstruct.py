@@ -204,3 +204,17 @@ def test_foliage_flags_and_guard(monkeypatch):
     with pytest.warns(UserWarning, match="the leaves were kept"):
         t, info = reconstruct(p, method="classic", foliage=True, return_info=True)
     assert (t.parent == -1).sum() == 1 and len(info["points"]) > 1000
+
+
+def test_shipped_foliage_network_finds_wood():
+    "On a leafy procedural scan it was not trained on, the shipped network's wood is mostly wood, and reconstruct(foliage=True) keeps it and one tree."
+    from treebook.foliage import WEIGHTS as FW, foliage_scan
+    from treebook.reconstruct import wood_mask
+    if not FW.exists(): pytest.skip("no shipped foliage weights")
+    p, wood = foliage_scan("elm", 29500)
+    p = p.astype(np.float64)
+    m = wood_mask(p, True)
+    assert (m & wood).sum() / m.sum() > 0.7          # precision
+    assert (m & wood).sum() / wood.sum() > 0.5       # recall
+    t, info = reconstruct(p, method="classic", foliage=True, return_info=True)
+    assert (t.parent == -1).sum() == 1 and len(info["points"]) < 0.6 * len(p)
