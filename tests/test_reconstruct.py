@@ -218,3 +218,10 @@ def test_shipped_foliage_network_finds_wood():
     assert (m & wood).sum() / wood.sum() > 0.5       # recall
     t, info = reconstruct(p, method="classic", foliage=True, return_info=True)
     assert (t.parent == -1).sum() == 1 and len(info["points"]) < 0.6 * len(p)
+
+
+def test_foliage_weights_given_must_exist(tmp_path):
+    "Weights named but missing are an error, not a silent switch to the geometric filter."
+    from treebook.reconstruct import wood_mask
+    p = np.random.default_rng(0).random((600, 3))
+    with pytest.raises(TreebookError, match="no foliage weights"): wood_mask(p, True, weights=tmp_path / "none.pt")

@@ -376,9 +376,9 @@ def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
 FOLIAGE = ("network", "geometric")
 
 def wood_mask(points, foliage=True, weights=None, seed: int = 0) -> np.ndarray:
-    "Mask of the wood among `points`: `foliage` 'network' (the wood/leaf PointNet++ of chapter 09c, at `weights` or the shipped ones), 'geometric' (`wood_points`), or True: the network if its weights exist."
+    "Mask of the wood among `points`: `foliage` 'network' (the wood/leaf PointNet++ of chapter 09c, at `weights` or the shipped ones), 'geometric' (`wood_points`), or True: the network if `weights` are given or shipped."
     from treebook.foliage import WEIGHTS as FW, load_foliage, wood_probability
-    how = ("network" if Path(weights or FW).exists() else "geometric") if foliage is True else foliage
+    how = ("network" if weights is not None or FW.exists() else "geometric") if foliage is True else foliage  # a path given must be read
     if how not in FOLIAGE: raise TreebookError(f"foliage must be True, False or one of {', '.join(FOLIAGE)}, got {foliage!r}")
     if how == "geometric": return wood_points(points)
     return wood_probability(load_foliage(weights), points, seed=seed) >= 0.5
