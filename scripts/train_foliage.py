@@ -93,7 +93,7 @@ def main():
 - **Training**: {len(losses)} steps of batch {a.batch}, Adam lr {a.lr} (x0.1 for the last fifth of the planned {a.steps} steps), {meta['minutes']} minutes on {meta['machine']}.
 - **Command**: `{cmd}` (commit {commit}), which wrote this file and `results/foliage.json`.
 - **Held-out scores** ({len(test)} scans of trees with seeds 29000 on, all {FOLIAGE_POINTS:,} points, probability 0.5): accuracy {scores['accuracy']:.3f}; wood precision {scores['wood_precision']:.3f}, recall {scores['wood_recall']:.3f}, IoU {scores['wood_iou']:.3f} ({scores['wood_share']:.0%} of the points are wood).
-- **Limits**: procedural leaves only (quads in clusters at the twigs); real foliage, needles and understorey differ. Use it through `reconstruct(..., foliage=True)` or `treebook reconstruct --foliage`.
+- **Limits**: procedural leaves only (quads in clusters at the twigs); real foliage, needles and understorey differ. Use it through `wood_probability`, `reconstruct(..., foliage=True)` or `treebook reconstruct --foliage`. On the held-out leafy trees of `results/foliage.json` a skeleton traced from the wood it keeps is *farther* from the whole tree (Chamfer distance) than one traced through the leaves: the leaves hang where the fine twigs are, the twigs it misses go with them, and what is left is the visible wood. Chapter 09c shows the table.
 """
     _atomic_write(Path(a.out).with_suffix(".md"), lambda f: f.write(card.encode()))
     res = dict(meta, pool_minutes=round((t1 - t0) / 60, 1), loss_first=float(np.mean(losses[:50])), loss_last=float(np.mean(losses[-50:])),

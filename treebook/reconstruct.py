@@ -366,12 +366,9 @@ def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000)
 
 # %% ../nbs/09b_reconstruct.ipynb #df6de7ad
 def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
-    "Mask of points whose `k`-neighbourhood is linear enough to be wood (a geometric stand-in for a foliage classifier)."
-    k = min(k, len(points))
-    _, j = cKDTree(points).query(points, k)
-    nb = points[j] - points[j].mean(1, keepdims=True)
-    ev = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", nb, nb))[:, ::-1]
-    return (ev[:, 0] - ev[:, 1]) / np.maximum(ev[:, 0], 1e-18) >= min_linearity
+    "Mask of points whose `k`-neighbourhood is linear enough to be wood (a geometric stand-in for a foliage classifier): the linearity of chapter 09c's `point_features`."
+    from treebook.foliage import point_features
+    return point_features(points, k)[:, 0] >= min_linearity
 
 FOLIAGE = ("network", "geometric")
 
