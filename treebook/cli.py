@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from .tree import TreebookError
@@ -128,15 +129,18 @@ def cmd_reconstruct(args):
     mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
     skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
     t0 = time.time()
-    tree = reconstruct(args.scan, method=args.method, up=args.up, foliage=args.foliage, seed=args.seed)
-    print(f"reconstructed {tree.n} branches with {args.method} in {time.time() - t0:.1f} s")
-    print(f"wrote {tree.save(out)}")
-    if mesh_out:
-        from treebook.mesh import export_mesh
-        print(f"wrote {export_mesh(tree, mesh_out, sides=12)}")
-    if skel_out:
-        from treebook.mesh import export_skeleton
-        print(f"wrote {export_skeleton(tree, skel_out)}")
+    made = reconstruct(args.scan, method=args.method, up=args.up, foliage=args.foliage, seed=args.seed, trees=args.trees)
+    made = made if args.trees == "all" else [made]
+    print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} branches) with {args.method} in {time.time() - t0:.1f} s")
+    numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p  # --trees all: tree_1.npz, tree_2.npz ...
+    for i, tree in enumerate(made):
+        print(f"wrote {tree.save(numbered(out, i))}")
+        if mesh_out:
+            from treebook.mesh import export_mesh
+            print(f"wrote {export_mesh(tree, numbered(mesh_out, i), sides=12)}")
+        if skel_out:
+            from treebook.mesh import export_skeleton
+            print(f"wrote {export_skeleton(tree, numbered(skel_out, i))}")
     return 0
 
 # %% ../nbs/11_cli.ipynb #45436cc7
@@ -320,7 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--render", action="store_true", help="also write a PNG picture per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_propagate)
-    s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan", description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic skeleton (classic), then join one connected tree in the scan's frame and units.")
+    s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan", description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic skeleton (classic), then join one connected tree in the scan's frame and units (one per stem with --trees).")
     s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
     s.add_argument("--out", required=True, help="tree file (.npz or .json)")
     s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply)")
@@ -328,6 +332,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", default="partnet", choices=["partnet", "classic"], help="neural decomposition or the geodesic baseline (default: partnet)")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
     s.add_argument("--foliage", action="store_true", help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
+    s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
+                   help="when the scan seems to hold several trees: join them into one (default, with a warning), keep the largest, or write all (OUT_1, OUT_2 ...)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     s.set_defaults(func=cmd_reconstruct)
     s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False, description="Train a TreeTransformer (see `treebook train --help`).")
@@ -375,14 +381,20 @@ def build_parser() -> argparse.ArgumentParser:
         s.set_defaults(func=_cmd_condition(kind))
     return p
 
+def _say_warning(message, category, filename, lineno, file=None, line=None):
+    "How the command shows a warning: one line on stderr, `warning: ...`, without the source line."
+    print(f"warning: {message}", file=sys.stderr)
+
 def main(argv=None) -> int:
     "Entry point of the `treebook` command; returns the exit status (2 for a user error)."
     argv = sys.argv[1:] if argv is None else list(argv)
-    try:
-        if argv[:1] == ["train"]: return cmd_train(argparse.Namespace(rest=argv[1:]))  # its own parser: options pass through untouched
-        args = build_parser().parse_args(argv)
-        return args.func(args) or 0
-    except TreebookError as e:
-        print(f"error: {e}", file=sys.stderr); return 2
-    except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr); return 130
+    with warnings.catch_warnings():
+        warnings.showwarning = _say_warning
+        try:
+            if argv[:1] == ["train"]: return cmd_train(argparse.Namespace(rest=argv[1:]))  # its own parser: options pass through untouched
+            args = build_parser().parse_args(argv)
+            return args.func(args) or 0
+        except TreebookError as e:
+            print(f"error: {e}", file=sys.stderr); return 2
+        except KeyboardInterrupt:
+            print("error: interrupted", file=sys.stderr); return 130

@@ -18,9 +18,9 @@ from .tree import Tree, TreebookError
 from .pointio import read_points
 
 # %% auto #0
-__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points', 'neighbour_graph',
-           'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'point_labels',
-           'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct']
+__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
+           'neighbour_graph', 'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage',
+           'point_labels', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -364,6 +364,48 @@ def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000)
         out[a:a + chunk][hit] = lab[ok[j[hit]]]
     return out
 
+# %% ../nbs/09b_reconstruct.ipynb #bf5e704b
+def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: float = 0.6, min_rise: float = 0.7, min_gap: float = 0.1,
+               k: int = 10) -> np.ndarray:
+    """Tree of each point of `points` (n, 3), z up: 0 for the tree with the most points, 1 for the next and so on, -1 for the points the
+    neighbour graph leaves out. One tree (all 0) unless two stems or more stand on the lowest `band` of the height (see the text)."""
+    p = np.asarray(points, np.float64)
+    g, idx, _ = neighbour_graph(p, k)
+    q, n = p[idx], len(idx)
+    out = np.full(len(p), -1); out[idx] = 0
+    z0, H = q[:, 2].min(), float(np.ptp(q[:, 2]))
+    if not H > 0: return out
+    low = q[:, 2] < z0 + band * H
+    gc = g.tocoo(); e = low[gc.row] & low[gc.col]
+    piece = connected_components(coo_matrix((np.ones(e.sum()), (gc.row[e], gc.col[e])), shape=(n, n)), directed=False)[1]
+    pieces = [c for c in (np.flatnonzero(low & (piece == i)) for i in np.unique(piece[low])) if len(c) >= 3]
+    if len(pieces) < 2: return out
+    src = np.array([c[np.argmin(q[c, 2])] for c in pieces])  # the lowest point of each piece
+    def owner(sources):
+        "Distance along the graph to the nearest of `sources`, and which one it is."
+        dist, _, s = dijkstra(g, indices=sources, min_only=True, return_predecessors=True)
+        look = np.full(n, -1); look[sources] = np.arange(len(sources))
+        return dist, look[s]
+    dist, who = owner(src)
+    share = np.bincount(who, minlength=len(src)) / n
+    height = np.array([np.ptp(q[who == i, 2]) / H for i in range(len(src))])
+    rise = np.zeros(len(src))
+    for i in range(len(src)):
+        near = (who == i) & (dist <= 0.1 * H)   # the first tenth of the height, along the graph
+        if near.sum() >= 3: rise[i] = (np.percentile(q[near, 2], 95) - q[src[i], 2]) / (0.1 * H)
+    stem = (share >= min_share) & (height >= min_height) & (rise >= min_rise)
+    if stem.sum() < 2: return out
+    main = np.flatnonzero(stem)[np.argmax(share[stem])]
+    kd = cKDTree(q[pieces[main], :2])
+    gap = np.array([kd.query(q[c, :2])[0].min() / H for c in pieces]); gap[main] = np.inf
+    stem &= gap >= min_gap
+    if stem.sum() < 2: return out
+    _, who = owner(src[stem])
+    size = np.bincount(who)
+    rank = np.empty_like(size); rank[np.argsort(-size, kind="stable")] = np.arange(len(size))
+    out[idx] = rank[who]
+    return out
+
 # %% ../nbs/09b_reconstruct.ipynb #df6de7ad
 def wood_points(points, k: int = 16, min_linearity: float = 0.5) -> np.ndarray:
     "Mask of points whose `k`-neighbourhood is linear enough to be wood (a geometric stand-in for a foliage classifier): the linearity of chapter 09c's `point_features`."
@@ -381,19 +423,10 @@ def wood_mask(points, foliage=True, weights=None, seed: int = 0) -> np.ndarray:
     return wood_probability(load_foliage(weights), points, seed=seed) >= 0.5
 
 METHODS = ("partnet", "classic")
+TREES = ("joined", "largest", "all")
 
-def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
-                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
-                foliage_weights=None):
-    "A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units."
-    if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    t0 = time.perf_counter()
-    raw = read_points(points, up=up)
-    p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
-    if foliage is not False:
-        w = wood_mask(p, foliage, foliage_weights, seed)
-        if w.sum() >= max(100, 0.05 * len(p)): p = p[w]
-        else: warnings.warn(f"only {int(w.sum())} of {len(p)} points look like wood: the leaves were kept (is this a leafy scan?)")
+def _one_tree(raw, p, method, seed, bin_size, weights, hermite, return_info, t0):
+    "The tree of the prepared points `p` (and with `return_info` its dict, see `reconstruct`)."
     labels, seg = None, None
     if method == "partnet":
         from treebook.partnet import load_partnet, segment
@@ -410,6 +443,30 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, s
     spacing = float(np.median(cKDTree(p[kept]).query(p[kept], 2)[0][:, 1])) if kept.sum() > 1 else _diag(p)
     full = point_labels(raw, p, segment_of, radius=3 * spacing)
     return tree, dict(points=p, segment=segment_of, labels_full=full, hermite_joins=joins, segmentation=seg, seconds=time.perf_counter() - t0)
+
+def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
+                max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
+                foliage_weights=None, trees: str = "joined"):
+    """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units. If `find_trees` sees
+    several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first)."""
+    if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if trees not in TREES: raise TreebookError(f"trees must be one of {', '.join(TREES)}, got {trees!r}")
+    t0 = time.perf_counter()
+    raw = read_points(points, up=up)
+    p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
+    if foliage is not False:
+        w = wood_mask(p, foliage, foliage_weights, seed)
+        if w.sum() >= max(100, 0.05 * len(p)): p = p[w]
+        else: warnings.warn(f"only {int(w.sum())} of {len(p)} points look like wood: the leaves were kept (is this a leafy scan?)")
+    which = find_trees(p)
+    k = int(which.max()) + 1
+    if k > 1 and trees == "joined":
+        bases = ", ".join(f"({x:.4g}, {y:.4g})" for x, y in (p[which == i][np.argmin(p[which == i, 2]), :2] for i in range(k)))
+        warnings.warn(f"the scan seems to hold {k} trees, with stems at x, y = {bases}; they were joined into one. "
+                      "trees='largest' keeps the largest, trees='all' makes one tree each (command line: --trees)")
+    parts = [p] if k == 1 or trees == "joined" else [p[which == i] for i in range(k if trees == "all" else 1)]
+    made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, return_info, t0) for q in parts]
+    return made if trees == "all" else made[0]
 
 # %% ../nbs/09b_reconstruct.ipynb #c15bc628
 SHIPPED_SCAN = Path(__file__).parent / "data" / "scans" / "tree13.xyz" if "__file__" in globals() else Path("../treebook/data/scans/tree13.xyz")
