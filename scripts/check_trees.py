@@ -37,12 +37,11 @@ def ground_disc(p, rng, n: int = 3000) -> np.ndarray:
                             lo[2] + rng.normal(0, 0.002 * ext[2], n)])
 
 
-def beside(p, q, rng) -> tuple:
-    "`q` moved to stand beside `p`: (the moved points, the distance between the stems in mean crown widths)."
+def beside(p, q, foot_p, foot_q, rng) -> tuple:
+    "`q` moved to stand beside `p`, its foot (the root of its tree) near `foot_p`: (the moved points, the distance between the stems in mean crown widths)."
     w = (np.ptp(p[:, :2], 0).mean() + np.ptp(q[:, :2], 0).mean()) / 2
     rel, a = rng.uniform(0.3, 1.0), rng.uniform(0, 2 * np.pi)
-    foot = lambda x: x[np.argmin(x[:, 2])]
-    shift = foot(p) - foot(q) + [rel * w * np.cos(a), rel * w * np.sin(a), rng.uniform(-0.05, 0.05) * np.ptp(p[:, 2])]
+    shift = foot_p - foot_q + [rel * w * np.cos(a), rel * w * np.sin(a), rng.uniform(-0.05, 0.05) * np.ptp(p[:, 2])]
     return q + shift, float(rel)
 
 
@@ -67,7 +66,7 @@ def main():
             for name, cloud in (("alone", p), ("alone on ground", np.vstack([p, ground_disc(p, rng)]))):
                 k = int(find_trees(prepare_points(cloud, seed=0)).max()) + 1
                 rows.append(dict(species=sp, seed=seed, condition=cond, case=name, trees=k))
-            q, rel = beside(p, scan(other, n_points=16384, seed=seed + 500, **kw).points.astype(np.float64), rng)
+            q, rel = beside(p, scan(other, n_points=16384, seed=seed + 500, **kw).points.astype(np.float64), truth.start[0, :3], other.start[0, :3], rng)
             pair = np.vstack([p, q])
             pts = prepare_points(pair, seed=0)
             src = np.r_[np.zeros(len(p), int), np.ones(len(q), int)]
