@@ -234,6 +234,7 @@ for key, name, target, sub in [
         ("species", "a gallery of the procedural species (botany)", "treebook.botany:demo_gallery", ""),
         ("grammar", "a wavelet grammar inferred from a shipped real scan, and three propagated trees", "treebook.wavelet:demo_grammar", "grammar"),
         ("reconstruct", "a real scan reconstructed into a tree (TreePartNet)", "treebook.reconstruct:demo_reconstruct", "reconstruct"),
+        ("trees", "two trees in one scan: found by their stems and reconstructed one by one", "treebook.reconstruct:demo_trees", "trees"),
         ("foliage", "a leafy scan: wood and leaves told apart, the tree reconstructed from the wood", "treebook.foliage:demo_foliage", "foliage"),
         ("sample", "trees sampled from the shipped elm model (HourglassTree)", "treebook.train:demo_sample", "sample"),
         ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.growth:demo_growth", "growth")]:

@@ -20,7 +20,7 @@ from .pointio import read_points
 # %% auto #0
 __all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
            'neighbour_graph', 'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage',
-           'point_labels', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct']
+           'point_labels', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -488,5 +488,30 @@ def demo_reconstruct(out_dir, seed: int = 0, method: str | None = None) -> list:
     img = image_grid([render(pts, view="front", size=(320, 400)), render(skel, view="front", size=(320, 400), point_size=1.5),
                       render(mesh, view="front", size=(320, 400))], ncols=3, labels=["scan", f"skeleton ({method})", "mesh"])
     png = out / "reconstructed_tree13.png"
+    _atomic_write(png, lambda f: img.save(f, format="PNG"))
+    return [Path(p) for p in paths] + [png]
+
+# %% ../nbs/09b_reconstruct.ipynb #01749879
+def demo_trees(out_dir, seed: int = 0, method: str | None = None) -> list:
+    "Two trees in one scan (the shipped real scan and a turned copy of it), reconstructed one by one into `out_dir`: tree_N.npz, tree_N.obj and a .png; returns the paths."
+    from treebook.mesh import tree_mesh, export_mesh
+    from treebook.render import render, image_grid
+    from treebook.partnet import WEIGHTS
+    from treebook.tree import _atomic_write
+    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
+    method = method or ("partnet" if WEIGHTS.exists() else "classic")
+    pts = read_points(SHIPPED_SCAN)
+    c = pts.mean(0)
+    both = np.vstack([pts, (pts - c) * [-1, -1, 1] + c + [1.2 * np.ptp(pts[:, 0]), 0, 0]])
+    made = reconstruct(both, method=method, seed=seed, trees="all")
+    paths, meshes = [], []
+    for i, t in enumerate(made):
+        m = tree_mesh(t, sides=12)
+        paths += [t.save(out / f"tree_{i + 1}.npz"), export_mesh(m, out / f"tree_{i + 1}.obj")]
+        m.visual.face_colors = [(105, 78, 52, 255), (52, 92, 140, 255)][i % 2]
+        meshes.append(m)
+    img = image_grid([render(both, view="front", size=(480, 320)), render(meshes, view="front", size=(480, 320))], ncols=2,
+                     labels=["one scan", f"{len(made)} tree{'s' if len(made) > 1 else ''} ({method})"])
+    png = out / "trees.png"
     _atomic_write(png, lambda f: img.save(f, format="PNG"))
     return [Path(p) for p in paths] + [png]
