@@ -378,7 +378,8 @@ def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: f
     low = q[:, 2] < z0 + band * H
     gc = g.tocoo(); e = low[gc.row] & low[gc.col]
     piece = connected_components(coo_matrix((np.ones(e.sum()), (gc.row[e], gc.col[e])), shape=(n, n)), directed=False)[1]
-    pieces = [c for c in (np.flatnonzero(low & (piece == i)) for i in np.unique(piece[low])) if len(c) >= 3]
+    lows = np.flatnonzero(low); lows = lows[np.argsort(piece[lows], kind="stable")]
+    pieces = [c for c in np.split(lows, np.flatnonzero(np.diff(piece[lows])) + 1) if len(c) >= 3]
     if len(pieces) < 2: return out
     src = np.array([c[np.argmin(q[c, 2])] for c in pieces])  # the lowest point of each piece
     def owner(sources):
@@ -388,12 +389,12 @@ def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: f
         return dist, look[s]
     dist, who = owner(src)
     share = np.bincount(who, minlength=len(src)) / n
-    height = np.array([np.ptp(q[who == i, 2]) / H for i in range(len(src))])
-    rise = np.zeros(len(src))
-    for i in range(len(src)):
-        near = (who == i) & (dist <= 0.1 * H)   # the first tenth of the height, along the graph
-        if near.sum() >= 3: rise[i] = (np.percentile(q[near, 2], 95) - q[src[i], 2]) / (0.1 * H)
-    stem = (share >= min_share) & (height >= min_height) & (rise >= min_rise)
+    top, bottom = np.full(len(src), -np.inf), np.full(len(src), np.inf)
+    np.maximum.at(top, who, q[:, 2]); np.minimum.at(bottom, who, q[:, 2])
+    stem = (share >= min_share) & ((top - bottom) / H >= min_height)
+    for i in np.flatnonzero(stem):   # rise: over the first tenth of the height, along the graph
+        near = (who == i) & (dist <= 0.1 * H)
+        stem[i] = near.sum() >= 3 and (np.percentile(q[near, 2], 95) - q[src[i], 2]) / (0.1 * H) >= min_rise
     if stem.sum() < 2: return out
     main = np.flatnonzero(stem)[np.argmax(share[stem])]
     kd = cKDTree(q[pieces[main], :2])
