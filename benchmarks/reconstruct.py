@@ -25,7 +25,7 @@ from treebook.mesh import tree_mesh
 from treebook.pointio import read_points
 from treebook.partnet import (WEIGHTS, load_partnet, segment, cluster_scores, merge_scores, affinity_scores, branch_chains, normalize_points, merge_seeds, predict_seeds,
                               som_clusters)
-from treebook.reconstruct import reconstruct, coverage, skeleton_distance
+from treebook.reconstruct import reconstruct, coverage, skeleton_distance, pipe_radii
 
 SCANS = root.parent / "shared" / "data" / "scans"
 
@@ -69,7 +69,8 @@ def real_scans(weights, methods):
             tree, s = timed(reconstruct, p, method=m, weights=weights)
             mesh = tree_mesh(tree, sides=12)
             rows.append(dict(scan=f.name, points=len(p), method=m, seconds=round(s, 2), branches=tree.n, roots=int((tree.parent == -1).sum()),
-                             coverage_1pct=round(coverage(p, mesh), 3), watertight=bool(mesh.is_watertight)))
+                             coverage_1pct=round(coverage(p, mesh), 3), watertight=bool(mesh.is_watertight),
+                             coverage_1pct_pipe=round(coverage(p, tree_mesh(pipe_radii(tree), sides=12)), 3)))  # the same tree with radii="pipe"
     return rows
 
 

@@ -129,7 +129,7 @@ def cmd_reconstruct(args):
     mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
     skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
     t0 = time.time()
-    made = reconstruct(args.scan, method=args.method, up=args.up, foliage=args.foliage, seed=args.seed, trees=args.trees)
+    made = reconstruct(args.scan, method=args.method, up=args.up, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
     made = made if args.trees == "all" else [made]
     print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} branches) with {args.method} in {time.time() - t0:.1f} s")
     numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p  # --trees all: tree_1.npz, tree_2.npz ...
@@ -333,6 +333,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", default="partnet", choices=["partnet", "classic"], help="neural decomposition or the geodesic baseline (default: partnet)")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
     s.add_argument("--foliage", action="store_true", help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
+    s.add_argument("--radii", default="measured", choices=["measured", "pipe"],
+                   help="branch radii measured from the points (default; the mesh hugs the scan) or from the pipe model scaled by the trunk (a clean taper)")
     s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
                    help="when the scan seems to hold several trees: join them into one (default, with a warning), keep the largest, or write all (OUT_1, OUT_2 ...)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")

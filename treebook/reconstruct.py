@@ -18,9 +18,10 @@ from .tree import Tree, TreebookError
 from .pointio import read_points
 
 # %% auto #0
-__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
+__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
            'neighbour_graph', 'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage',
-           'point_labels', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
+           'point_labels', 'pipe_radii', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct',
+           'demo_trees']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -364,6 +365,34 @@ def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000)
         out[a:a + chunk][hit] = lab[ok[j[hit]]]
     return out
 
+# %% ../nbs/09b_reconstruct.ipynb #80dfe23f
+def pipe_radii(tree: Tree, exponent: float = 2.5, trunk: int = 5) -> Tree:
+    """`tree` with radii from the pipe model: a segment's radius^`exponent` is the sum of its children's, so all tips are equal, scaled per root
+    so that its trunk (the first `trunk` segments up along the child with the most tips) keeps its measured radius (a median)."""
+    if not exponent > 0: raise TreebookError(f"exponent must be > 0, got {exponent!r}")
+    n, par = tree.n, tree.parent
+    tips = (np.bincount(par[par >= 0], minlength=n) == 0).astype(np.float64)
+    for i in range(n - 1, -1, -1):  # parents are stored before their children
+        if par[i] >= 0: tips[par[i]] += tips[i]
+    heavy = np.full(n, -1)
+    for i in range(n):
+        p = par[i]
+        if p >= 0 and (heavy[p] < 0 or tips[i] > tips[heavy[p]]): heavy[p] = i
+    root = np.arange(n)
+    for i in range(n):
+        if par[i] >= 0: root[i] = root[par[i]]
+    unit = tips ** (1 / exponent)
+    r = np.zeros(n)
+    for rt in np.flatnonzero(par < 0):
+        chain = [rt]
+        while len(chain) < trunk and heavy[chain[-1]] >= 0: chain.append(heavy[chain[-1]])
+        scale = float(np.median(tree.end[chain, 3] / unit[chain]))
+        r[root == rt] = scale * unit[root == rt]
+    start, end = tree.start.copy(), tree.end.copy()
+    end[:, 3] = r
+    start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
+    return Tree(start, end, par, check=False, **tree.attrs)
+
 # %% ../nbs/09b_reconstruct.ipynb #bf5e704b
 def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: float = 0.6, min_rise: float = 0.7, min_gap: float = 0.1,
                k: int = 10) -> np.ndarray:
@@ -425,8 +454,9 @@ def wood_mask(points, foliage=True, weights=None, seed: int = 0) -> np.ndarray:
 
 METHODS = ("partnet", "classic")
 TREES = ("joined", "largest", "all")
+RADII = ("measured", "pipe")
 
-def _one_tree(raw, p, method, seed, bin_size, weights, hermite, return_info, t0):
+def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_info, t0):
     "The tree of the prepared points `p` (and with `return_info` its dict, see `reconstruct`)."
     labels, seg = None, None
     if method == "partnet":
@@ -438,6 +468,7 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, return_info, t0)
     if hermite:
         joins = int((_turns(tree) > 120).sum())
         tree, last = hermite_joins(tree, return_index=True)
+    if radii == "pipe": tree = pipe_radii(tree)
     if not return_info: return tree
     segment_of = np.where(segment_of >= 0, last[np.maximum(segment_of, 0)], -1)
     kept = segment_of >= 0
@@ -447,11 +478,13 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, return_info, t0)
 
 def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
                 max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
-                foliage_weights=None, trees: str = "joined"):
+                foliage_weights=None, trees: str = "joined", radii: str = "measured"):
     """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units. If `find_trees` sees
-    several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first)."""
+    several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first).
+    `radii`: 'measured' from the points around each node, or 'pipe' (`pipe_radii`: the pipe model, scaled by the trunk)."""
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if trees not in TREES: raise TreebookError(f"trees must be one of {', '.join(TREES)}, got {trees!r}")
+    if radii not in RADII: raise TreebookError(f"radii must be one of {', '.join(RADII)}, got {radii!r}")
     t0 = time.perf_counter()
     raw = read_points(points, up=up)
     p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
@@ -466,14 +499,14 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, s
         warnings.warn(f"the scan seems to hold {k} trees, with stems at x, y = {bases}; they were joined into one. "
                       "trees='largest' keeps the largest, trees='all' makes one tree each (command line: --trees)")
     parts = [p] if k == 1 or trees == "joined" else [p[which == i] for i in range(k if trees == "all" else 1)]
-    made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, return_info, t0) for q in parts]
+    made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, radii, return_info, t0) for q in parts]
     return made if trees == "all" else made[0]
 
 # %% ../nbs/09b_reconstruct.ipynb #c15bc628
 SHIPPED_SCAN = Path(__file__).parent / "data" / "scans" / "tree13.xyz" if "__file__" in globals() else Path("../treebook/data/scans/tree13.xyz")
 
 def demo_reconstruct(out_dir, seed: int = 0, method: str | None = None) -> list:
-    "Reconstruct the shipped real scan into `out_dir`: tree .npz, mesh .obj, skeleton .ply and a .png; returns the paths."
+    "Reconstruct the shipped real scan into `out_dir`: tree .npz, mesh .obj (and one with the pipe model's radii), skeleton .ply and a .png; returns the paths."
     from treebook.mesh import tree_mesh, export_mesh, export_skeleton
     from treebook.render import render, image_grid
     from treebook.partnet import WEIGHTS
@@ -483,11 +516,13 @@ def demo_reconstruct(out_dir, seed: int = 0, method: str | None = None) -> list:
     pts = read_points(SHIPPED_SCAN)
     tree = reconstruct(pts, method=method, seed=seed)
     mesh = tree_mesh(tree, sides=12)
+    piped = tree_mesh(pipe_radii(tree), sides=12)
     paths = [tree.save(out / "reconstructed_tree13.npz"), export_mesh(mesh, out / "reconstructed_tree13.obj"),
-             export_skeleton(tree, out / "reconstructed_tree13_skeleton.ply")]
+             export_mesh(piped, out / "reconstructed_tree13_pipe.obj"), export_skeleton(tree, out / "reconstructed_tree13_skeleton.ply")]
     skel = sample_skeleton(tree, _diag(pts) / 600)
     img = image_grid([render(pts, view="front", size=(320, 400)), render(skel, view="front", size=(320, 400), point_size=1.5),
-                      render(mesh, view="front", size=(320, 400))], ncols=3, labels=["scan", f"skeleton ({method})", "mesh"])
+                      render(mesh, view="front", size=(320, 400)), render(piped, view="front", size=(320, 400))], ncols=4,
+                     labels=["scan", f"skeleton ({method})", "mesh", "mesh, pipe-model radii"])
     png = out / "reconstructed_tree13.png"
     _atomic_write(png, lambda f: img.save(f, format="PNG"))
     return [Path(p) for p in paths] + [png]
