@@ -367,27 +367,24 @@ def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000)
 
 # %% ../nbs/09b_reconstruct.ipynb #80dfe23f
 def pipe_radii(tree: Tree, exponent: float = 2.5, trunk: int = 5) -> Tree:
-    """`tree` with radii from the pipe model: a segment's radius^`exponent` is the sum of its children's, so all tips are equal, scaled per root
-    so that its trunk (the first `trunk` segments up along the child with the most tips) keeps its measured radius (a median)."""
+    """`tree` with radii from the pipe model (`Tree.with_pipe_radii`: a segment's radius^`exponent` is the sum of its children's, all tips equal),
+    scaled per root so that its trunk (the first `trunk` segments up along the child with the most tips) keeps its measured radius (a median);
+    a child starts as thick as its parent ends."""
     if not exponent > 0: raise TreebookError(f"exponent must be > 0, got {exponent!r}")
     n, par = tree.n, tree.parent
-    tips = (np.bincount(par[par >= 0], minlength=n) == 0).astype(np.float64)
-    for i in range(n - 1, -1, -1):  # parents are stored before their children
-        if par[i] >= 0: tips[par[i]] += tips[i]
+    unit = tree.with_pipe_radii(tip=1.0, exponent=exponent).end[:, 3].astype(np.float64)  # (tips carried)^(1/exponent)
     heavy = np.full(n, -1)
     for i in range(n):
         p = par[i]
-        if p >= 0 and (heavy[p] < 0 or tips[i] > tips[heavy[p]]): heavy[p] = i
+        if p >= 0 and (heavy[p] < 0 or unit[i] > unit[heavy[p]]): heavy[p] = i
     root = np.arange(n)
-    for i in range(n):
+    for i in range(n):  # parents are stored before their children
         if par[i] >= 0: root[i] = root[par[i]]
-    unit = tips ** (1 / exponent)
     r = np.zeros(n)
     for rt in np.flatnonzero(par < 0):
         chain = [rt]
         while len(chain) < trunk and heavy[chain[-1]] >= 0: chain.append(heavy[chain[-1]])
-        scale = float(np.median(tree.end[chain, 3] / unit[chain]))
-        r[root == rt] = scale * unit[root == rt]
+        r[root == rt] = float(np.median(tree.end[chain, 3] / unit[chain])) * unit[root == rt]
     start, end = tree.start.copy(), tree.end.copy()
     end[:, 3] = r
     start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
