@@ -477,7 +477,8 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, s
                 max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
                 foliage_weights=None, trees: str = "joined", radii: str = "measured"):
     """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units. If `find_trees` sees
-    several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first).
+    several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first,
+    of trees or with `return_info` of (tree, info) pairs).
     `radii`: 'measured' from the points around each node, or 'pipe' (`pipe_radii`: the pipe model, scaled by the trunk)."""
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if trees not in TREES: raise TreebookError(f"trees must be one of {', '.join(TREES)}, got {trees!r}")
