@@ -67,10 +67,10 @@ def real_scans(weights, methods):
         p = read_points(f)
         for m in methods:
             tree, s = timed(reconstruct, p, method=m, weights=weights)
-            mesh = tree_mesh(tree, sides=12)
+            mesh = tree_mesh(tree, sides=12).apply_translation(tree.origin)  # in the scan's coordinates
             rows.append(dict(scan=f.name, points=len(p), method=m, seconds=round(s, 2), branches=tree.n, roots=int((tree.parent == -1).sum()),
                              coverage_1pct=round(coverage(p, mesh), 3), watertight=bool(mesh.is_watertight),
-                             coverage_1pct_pipe=round(coverage(p, tree_mesh(pipe_radii(tree), sides=12)), 3)))  # the same tree with radii="pipe"
+                             coverage_1pct_pipe=round(coverage(p, tree_mesh(pipe_radii(tree), sides=12).apply_translation(tree.origin)), 3)))  # the same tree with radii="pipe"
     return rows
 
 

@@ -51,7 +51,8 @@ def cmd_info(args):
           f"  height    {i['height']:.4g}\n  depth     {i['depth']} branches from root to the farthest tip\n"
           f"  bbox      min {fmt(i['bbox_min'])}\n            max {fmt(i['bbox_max'])}\n"
           f"  length    {i['total_length']:.4g} in all, thickest radius {i['max_radius']:.4g}"
-          + (f"\n  arrays    {', '.join(i['attrs'])}" if i["attrs"] else ""))
+          + (f"\n  arrays    {', '.join(i['attrs'])}" if i["attrs"] else "")
+          + (f"\n  origin    {fmt(i['origin'])} (map coordinates: positions are stored about it)" if "origin" in i else ""))
     return 0
 
 def cmd_export(args):
@@ -124,23 +125,24 @@ def cmd_propagate(args):
 
 # %% ../nbs/11_cli.ipynb #44c140ad
 def cmd_reconstruct(args):
-    from treebook.reconstruct import reconstruct
+    from treebook.reconstruct import reconstruct, coverage
+    from treebook.pointio import read_points
+    from treebook.mesh import tree_mesh, export_mesh, export_skeleton
     out = _out_path(args.out, (".npz", ".json"), "the tree file")
     mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
     skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
     t0 = time.time()
-    made = reconstruct(args.scan, method=args.method, up=args.up, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
+    pts = read_points(args.scan, up=args.up)
+    made = reconstruct(pts, method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
     made = made if args.trees == "all" else [made]
     print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} branches) with {args.method} in {time.time() - t0:.1f} s")
+    meshes = [tree_mesh(t, sides=12).apply_translation(t.origin) for t in made]   # in the scan's coordinates
+    print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's diagonal of {coverage(pts, meshes):.1%} of its {len(pts):,} points")
     numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p  # --trees all: tree_1.npz, tree_2.npz ...
-    for i, tree in enumerate(made):
+    for i, (tree, mesh) in enumerate(zip(made, meshes)):
         print(f"wrote {tree.save(numbered(out, i))}")
-        if mesh_out:
-            from treebook.mesh import export_mesh
-            print(f"wrote {export_mesh(tree, numbered(mesh_out, i), sides=12)}")
-        if skel_out:
-            from treebook.mesh import export_skeleton
-            print(f"wrote {export_skeleton(tree, numbered(skel_out, i))}")
+        if mesh_out: print(f"wrote {export_mesh(mesh, numbered(mesh_out, i))}")
+        if skel_out: print(f"wrote {export_skeleton(tree, numbered(skel_out, i))}")
     return 0
 
 # %% ../nbs/11_cli.ipynb #45436cc7

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .tree import Tree, TreebookError, _atomic_write
+from .tree import Tree, TreebookError, _atomic_write, _placed, origin_for
 
 # %% auto #0
 __all__ = ['BARK', 'LEAF', 'MESH_FORMATS', 'continuation', 'tree_mesh', 'export_mesh', 'skeleton_nodes', 'export_skeleton',
@@ -147,14 +147,28 @@ def tree_mesh(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip:
 MESH_FORMATS = (".obj", ".glb", ".ply")
 
 def export_mesh(obj, path, **mesh_kw) -> Path:
-    "Write a mesh (or a Tree, meshed with `tree_mesh(**mesh_kw)`) to .obj, .glb or .ply, atomically."
+    """Write a mesh (or a Tree, meshed with `tree_mesh(**mesh_kw)` and moved to its `origin`) to .obj, .glb or .ply, atomically.
+    OBJ and PLY keep double precision (map coordinates); glTF stores float32."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in MESH_FORMATS: raise TreebookError(f"cannot export a mesh as {path.name!r}: use one of {', '.join(MESH_FORMATS)}")
-    mesh = tree_mesh(obj, **mesh_kw) if isinstance(obj, Tree) else obj
+    mesh = tree_mesh(obj, **mesh_kw).apply_translation(obj.origin) if isinstance(obj, Tree) else obj
     if not isinstance(mesh, trimesh.Trimesh): raise TreebookError(f"export_mesh needs a Tree or a trimesh.Trimesh, got {type(obj).__name__}")
-    data = mesh.export(file_type=ext[1:])
+    far = ext == ".ply" and np.spacing(np.float32(np.abs(mesh.vertices).max())) > 1e-5 * max(float(mesh.scale), 1e-30)
+    data = _ply_double(mesh) if far else mesh.export(file_type=ext[1:])   # trimesh writes PLY vertices in float32
     return _atomic_write(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))
+
+def _ply_double(mesh) -> bytes:
+    "A binary PLY of `mesh` with double-precision vertices (and its vertex colours, if it has them)."
+    v = np.asarray(mesh.vertices, "<f8"); f = np.asarray(mesh.faces, "<i4")
+    rgb = np.asarray(mesh.visual.vertex_colors)[:, :3].astype(np.uint8) if mesh.visual.kind in ("vertex", "face") else None
+    vdt = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")] + ([("red", "u1"), ("green", "u1"), ("blue", "u1")] if rgb is not None else [])
+    vert = np.empty(len(v), vdt); vert["x"], vert["y"], vert["z"] = v.T
+    if rgb is not None: vert["red"], vert["green"], vert["blue"] = rgb.T
+    face = np.empty(len(f), [("n", "u1"), ("i", "<i4", (3,))]); face["n"], face["i"] = 3, f
+    head = ["ply", "format binary_little_endian 1.0", "comment treebook mesh in map coordinates (double precision)", f"element vertex {len(v)}",
+            *[f"property {'double' if t == '<f8' else 'uchar'} {k}" for k, t in vdt], f"element face {len(f)}", "property list uchar int vertex_indices", "end_header"]
+    return ("\n".join(head) + "\n").encode() + vert.tobytes() + face.tobytes()
 
 def skeleton_nodes(tree: Tree):
     "(nodes (k, 4): x y z radius, edges (n, 2)): one node per branch end plus one per chain root, one edge per branch."
@@ -170,10 +184,13 @@ def export_skeleton(tree: Tree, path) -> Path:
     path = Path(path)
     if path.suffix.lower() != ".ply": raise TreebookError(f"a skeleton is written as .ply, not {path.suffix or 'no extension'}")
     nodes, edges = skeleton_nodes(tree)
+    far = bool(tree.origin.any())   # map coordinates: the origin added back, in double precision
+    nodes = nodes.astype(np.float64) + np.r_[tree.origin, 0] if far else nodes
+    kind, digits = ("double", 12) if far else ("float", 7)
     head = ["ply", "format ascii 1.0", "comment treebook skeleton: one vertex per node, one edge per branch",
-            f"element vertex {len(nodes)}", *[f"property float {k}" for k in ("x", "y", "z", "radius")],
+            f"element vertex {len(nodes)}", *[f"property {kind} {k}" for k in ("x", "y", "z", "radius")],
             f"element edge {len(edges)}", "property int vertex1", "property int vertex2", "end_header"]
-    body = [" ".join(f"{v:.7g}" for v in row) for row in nodes.tolist()] + [f"{a} {b}" for a, b in edges.tolist()]
+    body = [" ".join(f"{v:.{digits}g}" for v in row) for row in nodes.tolist()] + [f"{a} {b}" for a, b in edges.tolist()]
     return _atomic_write(path, lambda f: f.write(("\n".join(head + body) + "\n").encode()))
 
 def read_skeleton(path) -> Tree:
@@ -189,4 +206,7 @@ def read_skeleton(path) -> Tree:
         edges = np.array([l.split() for l in lines[end + 1 + nv:end + 1 + nv + ne]], dtype=np.int64).reshape(ne, 2)
     except (ValueError, KeyError, IndexError) as e:
         raise TreebookError(f"{path} is not a treebook skeleton PLY (x y z radius vertices and an edge list): {e}") from None
-    return Tree.from_segments(verts[edges[:, 0]], verts[edges[:, 1]])
+    o = origin_for(verts[:, :3])   # map coordinates come back about an origin, as they were written
+    if o is None: return Tree.from_segments(verts[edges[:, 0]], verts[edges[:, 1]])
+    verts[:, :3] -= o
+    return _placed(Tree.from_segments(verts[edges[:, 0]], verts[edges[:, 1]]), o)

@@ -14,7 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
-from .tree import Tree, TreebookError
+from .tree import Tree, TreebookError, origin_for, _placed
 from .pointio import read_points
 
 # %% auto #0
@@ -316,7 +316,7 @@ def hermite_joins(tree: Tree, max_angle: float = 120.0, pieces: int = 6, return_
             parent.append(last[p] if k == 0 else len(start) - 2); src.append(i)
         last[i] = len(start) - 1
     src = np.array(src, np.int64)
-    out = Tree(np.array(start, np.float32), np.array(end, np.float32), np.array(parent, np.int64), check=False,
+    out = Tree(np.array(start, np.float32), np.array(end, np.float32), np.array(parent, np.int64), check=False, origin=tree.origin,
                **{k: v[src] for k, v in tree.attrs.items()})
     return (out, last) if return_index else out
 
@@ -339,12 +339,14 @@ def skeleton_distance(tree: Tree, reference: Tree) -> dict:
     return dict(chamfer=100 * float(ab.mean() + ba.mean()) / 2 / d, hausdorff=100 * float(max(ab.max(), ba.max())) / d)
 
 def coverage(points, mesh, tol: float = 0.01) -> float:
-    "Share of `points` within `tol` x the points' bounding-box diagonal of the surface of `mesh`."
+    "Share of `points` within `tol` x the points' bounding-box diagonal of the surface of `mesh` (or of any of a list of meshes)."
     import open3d as o3d
     p = np.asarray(points, np.float64)
+    c = p.mean(0)  # distances in float32 about the points' centre: far from the origin (map coordinates) float32 would lose centimetres
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)), o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
-    d = scene.compute_distance(o3d.core.Tensor(p.astype(np.float32))).numpy()
+    for m in mesh if isinstance(mesh, (list, tuple)) else [mesh]:
+        scene.add_triangles(o3d.core.Tensor((np.asarray(m.vertices, np.float64) - c).astype(np.float32)), o3d.core.Tensor(np.asarray(m.faces, np.uint32)))
+    d = scene.compute_distance(o3d.core.Tensor((p - c).astype(np.float32))).numpy()
     return float((d <= tol * _diag(p)).mean())
 
 # %% ../nbs/09b_reconstruct.ipynb #ad5964bb
@@ -388,7 +390,7 @@ def pipe_radii(tree: Tree, exponent: float = 2.5, trunk: int = 5) -> Tree:
     start, end = tree.start.copy(), tree.end.copy()
     end[:, 3] = r
     start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
-    return Tree(start, end, par, check=False, **tree.attrs)
+    return Tree(start, end, par, check=False, origin=tree.origin, **tree.attrs)
 
 # %% ../nbs/09b_reconstruct.ipynb #bf5e704b
 def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: float = 0.6, min_rise: float = 0.7, min_gap: float = 0.1,
@@ -476,7 +478,8 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_in
 def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
                 max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
                 foliage_weights=None, trees: str = "joined", radii: str = "measured"):
-    """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units. If `find_trees` sees
+    """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units (about an `origin`
+    when the scan is in map coordinates, see `origin_for`). If `find_trees` sees
     several trees, `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list, largest first,
     of trees or with `return_info` of (tree, info) pairs).
     `radii`: 'measured' from the points around each node, or 'pipe' (`pipe_radii`: the pipe model, scaled by the trunk)."""
@@ -485,6 +488,8 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, s
     if radii not in RADII: raise TreebookError(f"radii must be one of {', '.join(RADII)}, got {radii!r}")
     t0 = time.perf_counter()
     raw = read_points(points, up=up)
+    o = origin_for(raw)   # map coordinates: work about an origin, so that the tree's float32 positions keep their detail
+    if o is not None: raw = raw - o
     p = prepare_points(raw, max_points=max_points, ground=ground, seed=seed, voxel=voxel)
     if foliage is not False:
         w = wood_mask(p, foliage, foliage_weights, seed)
@@ -493,11 +498,14 @@ def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, s
     which = find_trees(p)
     k = int(which.max()) + 1
     if k > 1 and trees == "joined":
-        bases = ", ".join(f"({x:.4g}, {y:.4g})" for x, y in (p[which == i][np.argmin(p[which == i, 2]), :2] for i in range(k)))
+        shift, d = (o[:2], 10) if o is not None else (0, 4)
+        bases = ", ".join(f"({x:.{d}g}, {y:.{d}g})" for x, y in (p[which == i][np.argmin(p[which == i, 2]), :2] + shift for i in range(k)))
         warnings.warn(f"the scan seems to hold {k} trees, with stems at x, y = {bases}; they were joined into one. "
                       "trees='largest' keeps the largest, trees='all' makes one tree each (command line: --trees)")
     parts = [p] if k == 1 or trees == "joined" else [p[which == i] for i in range(k if trees == "all" else 1)]
     made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, radii, return_info, t0) for q in parts]
+    if o is not None:  # back in the scan's frame: the tree about the origin, the points returned in the scan's coordinates
+        made = [(_placed(m[0], o), {**m[1], "points": m[1]["points"] + o}) if return_info else _placed(m, o) for m in made]
     return made if trees == "all" else made[0]
 
 # %% ../nbs/09b_reconstruct.ipynb #c15bc628

@@ -15,8 +15,8 @@ import numpy as np
 
 # %% auto #0
 __all__ = ['FORMAT_VERSION', 'TreebookError', 'Tree', 'children', 'depth', 'order', 'take', 'reorder', 'subtree', 'prefix',
-           'from_segments', 'translate', 'scale', 'rotate_z', 'mirror', 'Frame', 'normalize', 'save', 'read_json',
-           'load', 'info', 'with_pipe_radii', 'example_tree']
+           'from_segments', 'with_origin', 'translate', 'scale', 'rotate_z', 'mirror', 'origin_for', 'Frame',
+           'normalize', 'save', 'read_json', 'load', 'info', 'with_pipe_radii', 'example_tree']
 
 # %% ../nbs/00_tree.ipynb #6a559f51
 class TreebookError(ValueError):
@@ -24,7 +24,7 @@ class TreebookError(ValueError):
 
 FORMAT_VERSION = 1  # version of the .npz / .json tree schema written by `Tree.save`
 _CORE = ("start", "end", "parent")
-_RESERVED = _CORE + ("format_version", "format")
+_RESERVED = _CORE + ("format_version", "format", "origin")
 
 # %% ../nbs/00_tree.ipynb #8d102840
 def _points(a, name) -> np.ndarray:
@@ -68,8 +68,10 @@ def _check_topology(parent):
 # %% ../nbs/00_tree.ipynb #b684dca1
 class Tree:
     "A tree as `n` branch segments: `start`, `end` (n, 4: x, y, z, radius), `parent` (n,: -1 for a root), per-branch arrays."
-    def __init__(self, start, end, parent, *, check: bool = True, tol: float = 1e-4, allow_empty: bool = False, **per_branch):
+    def __init__(self, start, end, parent, *, check: bool = True, tol: float = 1e-4, allow_empty: bool = False, origin=None, **per_branch):
         start, end = _points(start, "start"), _points(end, "end")
+        origin = np.zeros(3) if origin is None else np.array(origin, dtype=np.float64).reshape(-1)
+        if origin.shape != (3,) or not np.isfinite(origin).all(): raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {origin.tolist()}")
         n = len(start)
         if end.shape != start.shape:
             raise TreebookError(f"`start` and `end` must have the same shape; got {start.shape} and {end.shape}")
@@ -90,8 +92,8 @@ class Tree:
             if v.ndim == 0 or len(v) != n:
                 raise TreebookError(f"per-branch array {k!r} must have one entry per branch ({n}); got shape {v.shape}")
             extra[k] = v
-        self.start, self.end, self.parent, self._attrs = start, end, parent, extra
-        for a in (start, end, parent, *extra.values()): a.flags.writeable = False
+        self.start, self.end, self.parent, self._attrs, self.origin = start, end, parent, extra, origin
+        for a in (start, end, parent, origin, *extra.values()): a.flags.writeable = False
         self._cache = {}
         if check and n: self._check_attachment(tol)
 
@@ -139,6 +141,7 @@ class Tree:
     def __repr__(self):
         if not self.n: return "Tree(empty)"
         extra = f", attrs={sorted(self._attrs)}" if self._attrs else ""
+        if self.origin.any(): extra += f", origin={self.origin.tolist()}"
         h = float(np.ptp(np.concatenate([self.start[:, 2], self.end[:, 2]])))
         return f"Tree(n={self.n}, roots={int((self.parent < 0).sum())}, height={h:.3g}{extra})"
 
@@ -147,7 +150,7 @@ class Tree:
         if not isinstance(other, Tree): return NotImplemented
         if set(self._attrs) != set(other._attrs): return False
         pairs = [(self.start, other.start), (self.end, other.end), (self.parent, other.parent)]
-        pairs += [(v, other._attrs[k]) for k, v in self._attrs.items()]
+        pairs += [(v, other._attrs[k]) for k, v in self._attrs.items()] + [(self.origin, other.origin)]
         return all(a.shape == b.shape and a.dtype == b.dtype and np.array_equal(a, b) for a, b in pairs)
     __hash__ = None
 
@@ -218,7 +221,7 @@ def take(self: Tree, idx, tol: float = 1e-4) -> Tree:
     new = np.full(self.n, -1, dtype=np.int64); new[idx] = np.arange(len(idx))
     p = self.parent[idx]
     parent = np.where(p >= 0, new[np.maximum(p, 0)], -1)
-    return Tree(self.start[idx], self.end[idx], parent, tol=tol, allow_empty=True, **{k: v[idx] for k, v in self._attrs.items()})
+    return Tree(self.start[idx], self.end[idx], parent, tol=tol, allow_empty=True, origin=self.origin, **{k: v[idx] for k, v in self._attrs.items()})
 
 def reorder(self: Tree, kind: str = "dfs", key=None) -> Tree:
     "The same tree with its branches stored in `kind` order ('dfs' or 'bfs')."
@@ -264,13 +267,28 @@ Tree.from_segments = classmethod(from_segments)
 
 # %% ../nbs/00_tree.ipynb #bfe3590a
 def _map(self: Tree, f, rscale: float = 1.0) -> Tree:
-    "A tree with `f` applied to all endpoint positions ((m, 3) -> (m, 3)) and radii times `rscale`."
+    """A tree with the affine map `f` applied to all endpoint positions ((m, 3) -> (m, 3)) and radii times `rscale`.
+    A tree with an `origin` keeps one: `f` moves the origin, and the linear part of `f` the positions about it."""
+    o, g = None, f
+    if self.origin.any():
+        shift = f(np.zeros((1, 3)))[0]
+        o, g = f(self.origin[None])[0], lambda p: f(p) - shift
     out = []
     for a in (self.start, self.end):
         b = a.astype(np.float64).copy()
-        b[:, :3] = f(b[:, :3]); b[:, 3] *= rscale
+        b[:, :3] = g(b[:, :3]); b[:, 3] *= rscale
         out.append(b)
-    return Tree(*out, self.parent, check=False, allow_empty=True, **self._attrs)
+    return Tree(*out, self.parent, check=False, allow_empty=True, origin=o, **self._attrs)
+
+def with_origin(self: Tree, origin=None) -> Tree:
+    "The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin into the positions)."
+    o = np.zeros(3) if origin is None else np.array(origin, dtype=np.float64).reshape(-1)
+    if o.shape != (3,) or not np.isfinite(o).all(): raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {o.tolist()}")
+    out = []
+    for a in (self.start, self.end):
+        b = a.astype(np.float64).copy(); b[:, :3] += self.origin - o
+        out.append(b)
+    return Tree(*out, self.parent, check=False, allow_empty=True, origin=o, **self._attrs)
 
 def translate(self: Tree, offset) -> Tree:
     "Move the tree by `offset` (x, y, z)."
@@ -295,14 +313,28 @@ def mirror(self: Tree, axis: str = "x") -> Tree:
     def f(p): p = p.copy(); p[:, k] *= -1; return p
     return self._map(f)
 
-Tree._map, Tree.translate, Tree.scale, Tree.rotate_z, Tree.mirror = _map, translate, scale, rotate_z, mirror
+def origin_for(points):
+    """An origin for the float64 positions `points` (m, 3) when float32 cannot hold them to 1e-5 of their extent (map coordinates):
+    their centre, rounded to a power of ten near their extent; None when they need none."""
+    p = np.asarray(points, np.float64).reshape(-1, 3)
+    if not len(p): return None
+    ext = max(float(np.linalg.norm(np.ptp(p, 0))), 1e-30)
+    if np.spacing(np.float32(np.abs(p).max())) <= 1e-5 * ext: return None
+    step = 10.0 ** np.ceil(np.log10(ext))
+    return np.round(p.mean(0) / step) * step
+
+def _placed(tree: Tree, origin) -> Tree:
+    "The same positions as `tree`, now about `origin` (so the tree moves by the change of origin)."
+    return Tree(tree.start, tree.end, tree.parent, check=False, allow_empty=True, origin=origin, **tree.attrs)
+
+Tree._map, Tree.with_origin, Tree.translate, Tree.scale, Tree.rotate_z, Tree.mirror = _map, with_origin, translate, scale, rotate_z, mirror
 
 @dataclass(frozen=True)
 class Frame:
     "The map into a canonical frame: p_canonical = (p - origin) * scale, radius * scale."
     origin: tuple
     scale: float
-    def apply(self, tree: Tree) -> Tree: "Take `tree` into the canonical frame."; return tree.translate(-np.asarray(self.origin)).scale(self.scale)
+    def apply(self, tree: Tree) -> Tree: "Take `tree` into the canonical frame."; return tree.translate(-np.asarray(self.origin)).scale(self.scale).with_origin()
     def restore(self, tree: Tree) -> Tree: "Take a canonical `tree` back to the original units."; return tree.scale(1 / self.scale).translate(self.origin)
     def to_dict(self) -> dict: return {"origin": [float(v) for v in self.origin], "scale": float(self.scale)}
     @classmethod
@@ -311,8 +343,8 @@ class Frame:
 def normalize(self: Tree):
     "(canonical tree, Frame): branch 0's start at the origin, height above it 1."
     if not self.n: raise TreebookError("cannot normalise an empty tree")
-    origin = self.start[0, :3].astype(np.float64)
-    p = np.concatenate([self.start[:, :3], self.end[:, :3]]) - origin
+    p = np.concatenate([self.start[:, :3], self.end[:, :3]]) - self.start[0, :3].astype(np.float64)
+    origin = self.start[0, :3].astype(np.float64) + self.origin
     h = p[:, 2].max()
     if h <= 1e-9 * max(np.abs(p).max(), 1e-30): h = np.linalg.norm(p, axis=1).max()
     if h <= 0: raise TreebookError("cannot normalise a tree of zero size (all its points coincide)")
@@ -340,11 +372,13 @@ def save(self: Tree, path) -> Path:
     suffix = path.suffix.lower()
     if suffix == ".npz":
         arrays = dict(start=self.start, end=self.end, parent=self.parent, format_version=np.int64(FORMAT_VERSION), **self._attrs)
+        if self.origin.any(): arrays["origin"] = self.origin
         return _atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
     if suffix == ".json":
         d = {"format": "treebook.tree", "format_version": FORMAT_VERSION, "start": self.start.tolist(),
              "end": self.end.tolist(), "parent": self.parent.tolist(),
              "attrs": {k: {"dtype": v.dtype.str, "data": v.tolist()} for k, v in self._attrs.items()}}
+        if self.origin.any(): d["origin"] = self.origin.tolist()
         return _atomic_write(path, lambda f: f.write(json.dumps(d).encode()))
     raise TreebookError(f"cannot save a tree as {path.name!r}: use a .npz or .json file name")
 
@@ -377,7 +411,7 @@ def load(cls, path, check: bool = True) -> Tree:
         _check_version(arrays.pop("format_version", 1), path)
         missing = [k for k in _CORE if k not in arrays]
         if missing: raise TreebookError(f"{path} is missing the array(s) {', '.join(missing)}: a tree .npz needs start, end and parent")
-        try: return cls(arrays.pop("start"), arrays.pop("end"), arrays.pop("parent"), check=check, **arrays)
+        try: return cls(arrays.pop("start"), arrays.pop("end"), arrays.pop("parent"), check=check, origin=arrays.pop("origin", None), **arrays)
         except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
     if suffix == ".json":
         d = read_json(path, "treebook.tree", FORMAT_VERSION, "tree")
@@ -386,7 +420,7 @@ def load(cls, path, check: bool = True) -> Tree:
         attrs = {k: np.array(v["data"], dtype=np.dtype(v["dtype"])) for k, v in d.get("attrs", {}).items()}
         try: return cls(np.array(d["start"], np.float32).reshape(-1, 4) if d["start"] == [] else d["start"],
                         np.array(d["end"], np.float32).reshape(-1, 4) if d["end"] == [] else d["end"],
-                        np.array(d["parent"], np.int64), check=check, **attrs)
+                        np.array(d["parent"], np.int64), check=check, origin=d.get("origin"), **attrs)
         except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
     raise TreebookError(f"cannot read {path.name!r} as a tree: expected a .npz or .json file")
 
@@ -395,11 +429,11 @@ Tree.save, Tree.load = save, classmethod(load)
 # %% ../nbs/00_tree.ipynb #c405bf6d
 def info(self: Tree) -> dict:
     "Branch count, roots, leaves, height, depth (longest root-to-tip chain of branches), bounding box, total length."
-    lo, hi = self.bounds()
+    lo, hi = self.bounds() + self.origin   # in the world: positions plus the origin
     return {"branches": self.n, "roots": len(self.roots), "leaves": len(self.leaves), "height": self.height,
             "depth": int(self.depth.max()) + 1, "bbox_min": lo.tolist(), "bbox_max": hi.tolist(),
             "total_length": float(self.lengths.sum()), "max_radius": float(max(self.start[:, 3].max(), self.end[:, 3].max())),
-            "attrs": sorted(self._attrs)}
+            "attrs": sorted(self._attrs), **({"origin": self.origin.tolist()} if self.origin.any() else {})}
 
 def with_pipe_radii(self: Tree, tip: float = 0.01, exponent: float = 2.5) -> Tree:
     "The same tree with radii by the pipe model: tips `tip`, r^exponent summed over children at each fork."
@@ -412,7 +446,7 @@ def with_pipe_radii(self: Tree, tip: float = 0.01, exponent: float = 2.5) -> Tre
     r = tip * w ** (1 / exponent)
     s, e = self.start.copy(), self.end.copy()
     s[:, 3] = e[:, 3] = r
-    return Tree(s, e, self.parent, check=False, **self._attrs)
+    return Tree(s, e, self.parent, check=False, origin=self.origin, **self._attrs)
 
 Tree.info, Tree.with_pipe_radii = info, with_pipe_radii
 
