@@ -1,4 +1,4 @@
-"""Reconstruction benchmark: speed (16,384 and 1,000,000 points), real scans, skeleton accuracy, clustering and merging scores.
+"""Reconstruction benchmark: speed (16,384 and 1,000,000 points), real scans (also moved to map coordinates), skeleton accuracy, clustering and merging scores.
 
 Usage: python benchmarks/reconstruct.py [--weights PATH] [--trees-per-species 2] [--cluster-scans 12] [--out results/reconstruct.json]
                                       [--only PARTS] [--skip PARTS] [--cluster-rows ROWS] [--merge] [--threads 2]
@@ -60,6 +60,9 @@ def speed(weights, methods):
     return out
 
 
+MAP_OFFSET = np.array([451234.5, 5432109.25, 301.0])  # each real scan is also reconstructed moved here, as if in UTM metres
+
+
 def real_scans(weights, methods):
     rows = []
     for f in sorted(SCANS.glob("*")):
@@ -71,6 +74,8 @@ def real_scans(weights, methods):
             rows.append(dict(scan=f.name, points=len(p), method=m, seconds=round(s, 2), branches=tree.n, roots=int((tree.parent == -1).sum()),
                              coverage_1pct=round(coverage(p, mesh), 3), watertight=bool(mesh.is_watertight),
                              coverage_1pct_pipe=round(coverage(p, tree_mesh(pipe_radii(tree), sides=12).apply_translation(tree.origin)), 3)))  # the same tree with radii="pipe"
+            far = reconstruct(p + MAP_OFFSET, method=m, weights=weights)  # the scan moved to map coordinates (UTM metres)
+            rows[-1]["coverage_1pct_map"] = round(coverage(p + MAP_OFFSET, tree_mesh(far, sides=12).apply_translation(far.origin)), 3)
     return rows
 
 
