@@ -57,10 +57,11 @@ class Alignment:
 
 def _fit_circle(xy):
     "Least-squares circle (Kasa): centre (2,), radius."
+    m = xy.mean(0); xy = xy - m   # about the points' mean: in map coordinates the squares would swamp the fit
     A = np.column_stack([2 * xy, np.ones(len(xy))])
     b = (xy ** 2).sum(1)
     (cx, cy, c), *_ = np.linalg.lstsq(A, b, rcond=None)
-    return np.array([cx, cy]), float(np.sqrt(max(c + cx * cx + cy * cy, 0.0)))
+    return np.array([cx, cy]) + m, float(np.sqrt(max(c + cx * cx + cy * cy, 0.0)))
 
 def _trunk(p, z0, H):
     "(centre xy, radius, arc direction or None) of the trunk just above the root, or None if it cannot be fitted."
