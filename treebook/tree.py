@@ -335,7 +335,12 @@ class Frame:
     origin: tuple
     scale: float
     def apply(self, tree: Tree) -> Tree: "Take `tree` into the canonical frame."; return tree.translate(-np.asarray(self.origin)).scale(self.scale).with_origin()
-    def restore(self, tree: Tree) -> Tree: "Take a canonical `tree` back to the original units."; return tree.scale(1 / self.scale).translate(self.origin)
+    def restore(self, tree: Tree) -> Tree:
+        "Take a canonical `tree` back to the original units (about an origin when the frame's origin is too far for float32, see `origin_for`)."
+        t = tree.scale(1 / self.scale)
+        o = np.asarray(self.origin, np.float64)
+        if np.spacing(np.float32(np.abs(o).max() + t.size)) > 1e-5 * max(t.size, 1e-30): return _placed(t, t.origin + o)
+        return t.translate(o)
     def to_dict(self) -> dict: return {"origin": [float(v) for v in self.origin], "scale": float(self.scale)}
     @classmethod
     def from_dict(cls, d): return cls(tuple(float(v) for v in d["origin"]), float(d["scale"]))
