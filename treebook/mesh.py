@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .tree import Tree, TreebookError, _atomic_write, _placed, origin_for
+from .tree import Tree, TreebookError, _atomic_write, _placed, origin_for, too_far
 
 # %% auto #0
 __all__ = ['BARK', 'LEAF', 'MESH_FORMATS', 'continuation', 'tree_mesh', 'export_mesh', 'skeleton_nodes', 'export_skeleton',
@@ -154,7 +154,7 @@ def export_mesh(obj, path, **mesh_kw) -> Path:
     if ext not in MESH_FORMATS: raise TreebookError(f"cannot export a mesh as {path.name!r}: use one of {', '.join(MESH_FORMATS)}")
     mesh = tree_mesh(obj, **mesh_kw).apply_translation(obj.origin) if isinstance(obj, Tree) else obj
     if not isinstance(mesh, trimesh.Trimesh): raise TreebookError(f"export_mesh needs a Tree or a trimesh.Trimesh, got {type(obj).__name__}")
-    far = ext == ".ply" and np.spacing(np.float32(np.abs(mesh.vertices).max())) > 1e-5 * max(float(mesh.scale), 1e-30)
+    far = ext == ".ply" and too_far(np.abs(mesh.vertices).max(), mesh.scale)
     data = _ply_double(mesh) if far else mesh.export(file_type=ext[1:])   # trimesh writes PLY vertices in float32
     return _atomic_write(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))
 

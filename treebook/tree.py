@@ -15,7 +15,7 @@ import numpy as np
 
 # %% auto #0
 __all__ = ['FORMAT_VERSION', 'TreebookError', 'Tree', 'children', 'depth', 'order', 'take', 'reorder', 'subtree', 'prefix',
-           'from_segments', 'with_origin', 'translate', 'scale', 'rotate_z', 'mirror', 'origin_for', 'Frame',
+           'from_segments', 'with_origin', 'translate', 'scale', 'rotate_z', 'mirror', 'too_far', 'origin_for', 'Frame',
            'normalize', 'save', 'read_json', 'load', 'info', 'with_pipe_radii', 'example_tree']
 
 # %% ../nbs/00_tree.ipynb #6a559f51
@@ -284,6 +284,7 @@ def with_origin(self: Tree, origin=None) -> Tree:
     "The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin into the positions)."
     o = np.zeros(3) if origin is None else np.array(origin, dtype=np.float64).reshape(-1)
     if o.shape != (3,) or not np.isfinite(o).all(): raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {o.tolist()}")
+    if np.array_equal(o, self.origin): return self   # trees are immutable: nothing to re-express
     out = []
     for a in (self.start, self.end):
         b = a.astype(np.float64).copy(); b[:, :3] += self.origin - o
@@ -313,13 +314,17 @@ def mirror(self: Tree, axis: str = "x") -> Tree:
     def f(p): p = p.copy(); p[:, k] *= -1; return p
     return self._map(f)
 
+def too_far(magnitude: float, extent: float) -> bool:
+    "Whether float32 positions as large as `magnitude` cannot hold detail of 1e-5 x `extent` (map coordinates need an origin)."
+    return bool(np.spacing(np.float32(magnitude)) > 1e-5 * max(float(extent), 1e-30))
+
 def origin_for(points):
     """An origin for the float64 positions `points` (m, 3) when float32 cannot hold them to 1e-5 of their extent (map coordinates):
     their centre, rounded to a power of ten near their extent; None when they need none."""
     p = np.asarray(points, np.float64).reshape(-1, 3)
     if not len(p): return None
     ext = max(float(np.linalg.norm(np.ptp(p, 0))), 1e-30)
-    if np.spacing(np.float32(np.abs(p).max())) <= 1e-5 * ext: return None
+    if not too_far(np.abs(p).max(), ext): return None
     step = 10.0 ** np.ceil(np.log10(ext))
     return np.round(p.mean(0) / step) * step
 
@@ -339,7 +344,7 @@ class Frame:
         "Take a canonical `tree` back to the original units (about an origin when the frame's origin is too far for float32, see `origin_for`)."
         t = tree.scale(1 / self.scale)
         o = np.asarray(self.origin, np.float64)
-        if np.spacing(np.float32(np.abs(o).max() + t.size)) > 1e-5 * max(t.size, 1e-30): return _placed(t, t.origin + o)
+        if too_far(np.abs(o).max() + t.size, t.size): return _placed(t, t.origin + o)
         return t.translate(o)
     def to_dict(self) -> dict: return {"origin": [float(v) for v in self.origin], "scale": float(self.scale)}
     @classmethod
