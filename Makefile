@@ -17,7 +17,10 @@ $(STAMP): settings.ini setup.py | $(PY)
 	$(PY) -m pip install -q -e ".[dev]"
 	@touch $(STAMP)
 
+# dash (which open3d pulls in) leaves a JupyterLab source extension that only a `jupyter lab build` with node could
+# include, so every start of `jupyter lab` asks "Build Recommended". treebook never uses it: remove it.
 install: $(STAMP)
+	@rm -f $(VENV)/share/jupyter/lab/extensions/dash-jupyterlab.tgz
 
 demo: install
 	$(VENV)/bin/treebook demo
