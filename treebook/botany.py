@@ -53,7 +53,8 @@ class Species:
     lateral_tropism: float = 0.05 # eta for lateral axes
     wander: float = 0.08          # random bend per internode
     # life
-    shed: float = 0.25            # a lateral axis is shed when the mean light exposure of its internodes falls below this
+    # a lateral axis is shed when the mean light exposure of its internodes falls below this
+    shed: float = 0.25
     cycles: int = 16              # most growth cycles (years)
     max_branches: int = 400       # cap on the number of Tree branches (reached by stopping growth)
     # pipe model radii
@@ -66,7 +67,10 @@ class Species:
     def replace(self, **kw) -> "Species":
         "A copy with some parameters changed (checked)."
         bad = [k for k in kw if k not in {f.name for f in fields(self)}]
-        if bad: raise TreebookError(f"unknown species parameter(s) {', '.join(bad)}: known are {', '.join(f.name for f in fields(self))}")
+        if bad:
+            raise TreebookError(
+                f"unknown species parameter(s) {', '.join(bad)}: known are {', '.join(f.name for f in fields(self))}"
+            )
         return dataclasses.replace(self, **kw)
 
     def to_dict(self) -> dict: return asdict(self)
@@ -84,22 +88,30 @@ def check_species(sp) -> None:
     for k, (lo, hi) in _RANGES.items():
         v = getattr(sp, k)
         if not isinstance(v, (int, float, np.integer, np.floating)) or not np.isfinite(v) or not lo <= v <= hi:
-            raise TreebookError(f"species {sp.name!r}: parameter {k}={v!r} is out of range; it must be between {lo} and {hi}")
-    if sp.shape not in ("ovoid", "cone"): raise TreebookError(f"species {sp.name!r}: shape must be 'ovoid' or 'cone', got {sp.shape!r}")
+            raise TreebookError(
+                f"species {sp.name!r}: parameter {k}={v!r} is out of range; it must be between {lo} and {hi}"
+            )
+    if sp.shape not in ("ovoid", "cone"):
+        raise TreebookError(f"species {sp.name!r}: shape must be 'ovoid' or 'cone', got {sp.shape!r}")
     if sp.phyllotaxis not in ("spiral", "opposite", "whorl"):
-        raise TreebookError(f"species {sp.name!r}: phyllotaxis must be 'spiral', 'opposite' or 'whorl', got {sp.phyllotaxis!r}")
-    if sp.crown_base >= sp.height: raise TreebookError(f"species {sp.name!r}: crown_base ({sp.crown_base}) must be below height ({sp.height})")
+        raise TreebookError(
+            f"species {sp.name!r}: phyllotaxis must be 'spiral', 'opposite' or 'whorl', got {sp.phyllotaxis!r}"
+        )
+    if sp.crown_base >= sp.height:
+        raise TreebookError(f"species {sp.name!r}: crown_base ({sp.crown_base}) must be below height ({sp.height})")
 
 # %% ../nbs/02_botany.ipynb #699f2581
 def _unit(v):
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     return np.divide(v, n, out=np.zeros_like(v), where=n > 1e-12)
 
+# %% ../nbs/02_botany.ipynb #92829b7d
 def _envelope(sp: Species, rng):
     "Per-tree (height, crown_base, crown_radius), jittered by `sp.jitter`."
     s = np.clip(1 + sp.jitter * rng.normal(size=2), 0.5, 1.5)
     return sp.height * s[0], sp.crown_base * s[0], sp.crown_radius * s[1]
 
+# %% ../nbs/02_botany.ipynb #328111c1
 def _profile(sp: Species, u):
     "Relative radius of the crown envelope at relative crown height `u` in [0, 1]."
     u = np.clip(u, 0, 1)
@@ -108,6 +120,7 @@ def _profile(sp: Species, u):
     t = np.where(u < w, (u - w) / max(w, 1e-6), (u - w) / max(1 - w, 1e-6))
     return np.sqrt(np.clip(1 - t * t, 0, 1))
 
+# %% ../nbs/02_botany.ipynb #feeb20ac
 def sample_markers(sp: Species, n: int, rng, env=None) -> np.ndarray:
     "`n` attraction points uniformly inside the crown envelope (rejection sampling from its bounding cylinder)."
     H, zb, R = env or (sp.height, sp.crown_base, sp.crown_radius)
@@ -123,7 +136,8 @@ def sample_markers(sp: Species, n: int, rng, env=None) -> np.ndarray:
 _Z = np.array([0.0, 0.0, 1.0])
 
 def _lateral_dirs(d, azimuth, angle):
-    "Directions at `angle` (radians) from the axis directions `d` (m, 3), at `azimuth` around them (0 = horizontal side)."
+    """Directions at `angle` (radians) from the axis directions `d` (m, 3), at `azimuth` around them (0 = horizontal
+    side)."""
     u = np.cross(d, _Z)
     flat = np.linalg.norm(u, axis=1) < 1e-6
     u[flat] = np.cross(d[flat], [1.0, 0, 0])
@@ -131,6 +145,7 @@ def _lateral_dirs(d, azimuth, angle):
     side = np.cos(azimuth)[:, None] * u + np.sin(azimuth)[:, None] * w
     return _unit(np.cos(angle)[:, None] * d + np.sin(angle)[:, None] * side)
 
+# %% ../nbs/02_botany.ipynb #12ae14f4
 def _levels(depth):
     "Element indices grouped by depth: a list indexed by depth."
     o = np.argsort(depth, kind="stable")
@@ -166,20 +181,38 @@ class _Grower:
         d = _unit(np.tile(_Z, (k, 1)) + rng.normal(0, 0.01, (k, 3)))
         p1 = np.cumsum(d * seg, 0); p0 = np.vstack([np.zeros(3), p1[:-1]])
         tip = np.zeros(k, bool); tip[-1] = True
-        self._append(self.i, p0=p0, p1=p1, par=np.arange(k) - 1, cyc=np.zeros(k, int), order=np.zeros(k, int),
-                     depth=np.arange(k), main=np.ones(k, bool), alive=np.ones(k, bool), tip=tip, bend=np.zeros(k, bool), brk=tip.copy())
+        self._append(
+            self.i,
+            p0=p0,
+            p1=p1,
+            par=np.arange(k) - 1,
+            cyc=np.zeros(k, int),
+            order=np.zeros(k, int),
+            depth=np.arange(k),
+            main=np.ones(k, bool),
+            alive=np.ones(k, bool),
+            tip=tip,
+            bend=np.zeros(k, bool),
+            brk=tip.copy(),
+        )
         if sp.stems > 1:  # co-dominant stems leave the collar, tilted outwards at evenly spread azimuths
             az = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(sp.stems) / sp.stems
-            dirs = _lateral_dirs(np.tile(_Z, (sp.stems, 1)), az, np.deg2rad(sp.branch_angle * 0.5 * rng.uniform(0.5, 1.2, sp.stems)))
+            dirs = _lateral_dirs(
+                np.tile(_Z, (sp.stems, 1)), az, np.deg2rad(sp.branch_angle * 0.5 * rng.uniform(0.5, 1.2, sp.stems))
+            )
             self._buds(np.tile(p1[-1], (sp.stems, 1)), dirs, np.full(sp.stems, k - 1), np.ones(sp.stems, bool),
                        np.zeros(sp.stems, int), np.full(sp.stems, k), rng.uniform(0, 2 * np.pi, sp.stems))
         else:
             self._node_buds(np.arange(k), d, np.zeros(k), np.zeros(k, int), tip)
-            self._buds(p1[-1:], d[-1:], np.array([k - 1]), np.ones(1, bool), np.zeros(1, int), np.array([k]), np.zeros(1))
+            self._buds(
+                p1[-1:], d[-1:], np.array([k - 1]), np.ones(1, bool), np.zeros(1, int), np.array([k]), np.zeros(1)
+            )
 
     def _buds(self, pos, dirs, par, main, order, depth, phi):
         n = len(pos)
-        self._append(self.b, pos=pos, dir=dirs, par=par, main=main, order=order, depth=depth, phi=phi, alive=np.ones(n, bool))
+        self._append(
+            self.b, pos=pos, dir=dirs, par=par, main=main, order=order, depth=depth, phi=phi, alive=np.ones(n, bool)
+        )
 
     def _node_buds(self, ids, d, phi, order, tip):
         "Lateral buds at the end nodes of internodes `ids` (directions `d`, phyllotaxis azimuths `phi`, axis `order`)."
@@ -202,12 +235,14 @@ class _Grower:
                    order[sel] + 1, self.i["depth"][idx] + 1, rng.uniform(0, 2 * np.pi, len(sel)))
 
     def _light(self, B):
-        "Q (0 or 1) and the unit direction to free space V for the live buds `B` (markers go to the nearest bud that sees them)."
+        """Q (0 or 1) and the unit direction to free space V for the live buds `B` (markers go to the nearest bud that
+        sees them)."""
         sp, m = self.sp, self.markers
         Q, V = np.zeros(len(B)), np.zeros((len(B), 3))
         if not len(m): return Q, V
         dirs = self.b["dir"][B]
-        pos = self.b["pos"][B] + 0.25 * self.L * dirs  # a bud perceives from just ahead of its node (breaks ties between buds of a node)
+        # a bud perceives from just ahead of its node (breaks ties between buds of a node)
+        pos = self.b["pos"][B] + 0.25 * self.L * dirs
         k = min(6, len(B))
         d, j = cKDTree(pos).query(m, k=k, distance_upper_bound=sp.perception_radius * self.L)
         if k == 1: d, j = d[:, None], j[:, None]
@@ -244,7 +279,8 @@ class _Grower:
         v = np.zeros(len(par)); v[~has] = sp.vigor * Q[~has]
         for sel in levels[1:]: v[sel] = v[par[sel]] * f[sel]
         vb = v[ni:]
-        if Q[~has].sum() == 0 or not (vb >= 1).any(): return False  # no light reaches the tree, or no bud is vigorous enough
+        # no light reaches the tree, or no bud is vigorous enough
+        if Q[~has].sum() == 0 or not (vb >= 1).any(): return False
         self._shoots(B, vb, Vb)
         self._shed()
         return not self.capped
@@ -307,14 +343,17 @@ class _Grower:
         phi = phi0[rows] + dv * step
         self._node_buds(ids, Dd[sel], phi, ordr, tipm)
         last = ids[tipm]; r = rows[tipm]
-        self._buds(I["p1"][last], Dd[sel][tipm], last, np.ones(len(last), bool), order[acc], dep[tipm] + 1, phi0 + dv * cnt)
+        self._buds(
+            I["p1"][last], Dd[sel][tipm], last, np.ones(len(last), bool), order[acc], dep[tipm] + 1, phi0 + dv * cnt
+        )
         # free space near the new nodes is taken
         if len(self.markers):
             dist, _ = cKDTree(P1[sel]).query(self.markers, distance_upper_bound=self.sp.occupancy_radius * self.L)
             self.markers = self.markers[~np.isfinite(dist)]
 
     def _exposure(self, idx):
-        "Light reaching the end nodes of internodes `idx`: 1 / (1 + nodes in the 45-degree cone above within 5 internodes / 8)."
+        """Light reaching the end nodes of internodes `idx`: 1 / (1 + nodes in the 45-degree cone above within 5
+        internodes / 8)."""
         p = self.i["p1"][idx]
         pairs = cKDTree(p).query_pairs(5 * self.L, output_type="ndarray")
         if not len(pairs): return np.ones(len(idx))
@@ -363,15 +402,18 @@ class _Grower:
 
 # %% ../nbs/02_botany.ipynb #5ac398fd
 def _stage_of(cyc, stages):
-    "Stage of birth (0..stages-1) from the growth cycle of birth; within a cycle by birth order if there are fewer cycles than stages."
+    """Stage of birth (0..stages-1) from the growth cycle of birth; within a cycle by birth order if there are fewer
+    cycles than stages."""
     T = int(cyc.max()) + 1
     if T >= stages: return (cyc * stages) // T
     cnt = np.bincount(cyc, minlength=T)
     rank = np.arange(len(cyc)) - np.concatenate([[0], np.cumsum(cnt)[:-1]])[cyc]
     return np.minimum(((cyc + rank / cnt[cyc]) * stages / T).astype(int), stages - 1)
 
+# %% ../nbs/02_botany.ipynb #a4fbb82a
 def _pipe(parent, n, tip, a):
-    "Pipe-model (start, end) radii of the first `n` branches: tips `tip`; start r^a = number of tips carried; end = largest child's start."
+    """Pipe-model (start, end) radii of the first `n` branches: tips `tip`; start r^a = number of tips carried; end =
+    largest child's start."""
     parent = parent[:n]
     depth = np.zeros(n, int)
     for i in range(1, n): depth[i] = depth[parent[i]] + 1 if parent[i] >= 0 else 0
@@ -385,35 +427,120 @@ def _pipe(parent, n, tip, a):
 
 # %% ../nbs/02_botany.ipynb #88845d01
 SPECIES = {
-    "elm": Species("elm", height=14, crown_base=3.5, crown_radius=8.0, widest=0.65, markers=3000, internode=0.9,
-                   apical_dominance=0.48, vigor=2.0, branch_angle=40, divergence=180, tropism=0.05, lateral_tropism=0.08,
-                   wander=0.08, max_branches=200),
-    "hickory": Species("hickory", height=20, crown_base=6.0, crown_radius=5.5, widest=0.45, markers=4000, internode=0.6,
-                       apical_dominance=0.56, branch_angle=50, tropism=0.15, lateral_tropism=0.0, max_branches=600),
-    "shadbush": Species("shadbush", height=6, crown_base=0.8, crown_radius=2.8, widest=0.55, markers=3000, internode=0.3,
-                        apical_dominance=0.52, branch_angle=35, stems=5, tropism=0.2, lateral_tropism=0.1, max_branches=400),
-    "spruce": Species("spruce", height=20, crown_base=1.5, crown_radius=3.6, shape="cone", markers=5000, internode=0.5,
-                      apical_dominance=0.72, vigor=2.5, phyllotaxis="whorl", whorl=5, branch_angle=80, max_order=3,
-                      tropism=0.4, lateral_tropism=-0.06, environment=0.2, wander=0.04, max_branches=800),
-    "tulip": Species("tulip", height=26, crown_base=9.0, crown_radius=5.0, widest=0.35, markers=4000, internode=0.7,
-                     apical_dominance=0.62, branch_angle=55, tropism=0.25, lateral_tropism=0.03, max_branches=600),
-    "vitellaria": Species("vitellaria", height=10, crown_base=2.5, crown_radius=6.0, widest=0.15, markers=4000, internode=0.55,
-                          apical_dominance=0.47, branch_angle=50, tropism=0.02, lateral_tropism=0.0, wander=0.2, max_branches=500),
+    "elm": Species(
+        "elm",
+        height=14,
+        crown_base=3.5,
+        crown_radius=8.0,
+        widest=0.65,
+        markers=3000,
+        internode=0.9,
+        apical_dominance=0.48,
+        vigor=2.0,
+        branch_angle=40,
+        divergence=180,
+        tropism=0.05,
+        lateral_tropism=0.08,
+        wander=0.08,
+        max_branches=200,
+    ),
+    "hickory": Species(
+        "hickory",
+        height=20,
+        crown_base=6.0,
+        crown_radius=5.5,
+        widest=0.45,
+        markers=4000,
+        internode=0.6,
+        apical_dominance=0.56,
+        branch_angle=50,
+        tropism=0.15,
+        lateral_tropism=0.0,
+        max_branches=600,
+    ),
+    "shadbush": Species(
+        "shadbush",
+        height=6,
+        crown_base=0.8,
+        crown_radius=2.8,
+        widest=0.55,
+        markers=3000,
+        internode=0.3,
+        apical_dominance=0.52,
+        branch_angle=35,
+        stems=5,
+        tropism=0.2,
+        lateral_tropism=0.1,
+        max_branches=400,
+    ),
+    "spruce": Species(
+        "spruce",
+        height=20,
+        crown_base=1.5,
+        crown_radius=3.6,
+        shape="cone",
+        markers=5000,
+        internode=0.5,
+        apical_dominance=0.72,
+        vigor=2.5,
+        phyllotaxis="whorl",
+        whorl=5,
+        branch_angle=80,
+        max_order=3,
+        tropism=0.4,
+        lateral_tropism=-0.06,
+        environment=0.2,
+        wander=0.04,
+        max_branches=800,
+    ),
+    "tulip": Species(
+        "tulip",
+        height=26,
+        crown_base=9.0,
+        crown_radius=5.0,
+        widest=0.35,
+        markers=4000,
+        internode=0.7,
+        apical_dominance=0.62,
+        branch_angle=55,
+        tropism=0.25,
+        lateral_tropism=0.03,
+        max_branches=600,
+    ),
+    "vitellaria": Species(
+        "vitellaria",
+        height=10,
+        crown_base=2.5,
+        crown_radius=6.0,
+        widest=0.15,
+        markers=4000,
+        internode=0.55,
+        apical_dominance=0.47,
+        branch_angle=50,
+        tropism=0.02,
+        lateral_tropism=0.0,
+        wander=0.2,
+        max_branches=500,
+    ),
 }
 
 def species(name) -> Species:
     "The preset `Species` called `name` (or `name` itself if it is already a `Species`)."
     if isinstance(name, Species): return name
-    if name not in SPECIES: raise TreebookError(f"unknown species {name!r}: use one of {', '.join(SPECIES)} or pass a Species")
+    if name not in SPECIES:
+        raise TreebookError(f"unknown species {name!r}: use one of {', '.join(SPECIES)} or pass a Species")
     return SPECIES[name]
 
 # %% ../nbs/02_botany.ipynb #d2f9a612
 def grow(sp, seed: int = 0, stages: int = 10, max_branches: int | None = None, canonical: bool = True) -> list:
-    "The growth history of one tree as `stages` Trees; each contains the one before at the same place; per-branch `stage` of birth."
+    """The growth history of one tree as `stages` Trees; each contains the one before at the same place; per-branch
+    `stage` of birth."""
     sp = species(sp)
     cap = sp.max_branches if max_branches is None else max_branches
-    if not isinstance(cap, (int, np.integer)) or cap < 2: raise TreebookError(f"max_branches must be a whole number >= 2, got {cap!r}")
-    if not isinstance(stages, (int, np.integer)) or not 1 <= stages <= 1000: raise TreebookError(f"stages must be a whole number in 1..1000, got {stages!r}")
+    if not isinstance(cap, (int, np.integer)) or cap < 2:
+        raise TreebookError(f"max_branches must be a whole number >= 2, got {cap!r}")
+    if not isinstance(stages, (int, np.integer)) or not 1 <= stages <= 1000:
+        raise TreebookError(f"stages must be a whole number in 1..1000, got {stages!r}")
     g = _Grower(sp, seed, int(cap))
     for _ in range(sp.cycles):
         if not g.step(): break
@@ -423,19 +550,26 @@ def grow(sp, seed: int = 0, stages: int = 10, max_branches: int | None = None, c
     out = []
     for n in counts:
         rs, re = _pipe(parent, n, sp.tip_radius * g.env[0] / sp.height, sp.pipe_exponent)
-        out.append(Tree(np.column_stack([s[:n], rs]), np.column_stack([e[:n], re]), parent[:n], stage=stage[:n].astype(np.int16)))
+        out.append(
+            Tree(
+                np.column_stack([s[:n], rs]), np.column_stack([e[:n], re]), parent[:n], stage=stage[:n].astype(np.int16)
+            )
+        )
     if canonical:
         _, frame = out[-1].normalize()
         out = [frame.apply(t) for t in out]
     return out
 
+# %% ../nbs/02_botany.ipynb #168ed615
 def grow_tree(sp, seed: int = 0, max_branches: int | None = None) -> Tree:
     "One full-grown tree (the last stage of `grow`)."
     return grow(sp, seed, stages=1, max_branches=max_branches)[0]
 
+# %% ../nbs/02_botany.ipynb #9e0d4a63
 def stage_tree(tree: Tree, k: int, exponent: float = 2.5) -> Tree:
     "The tree at stage `k` from a final grown tree (its per-branch `stage`), with its pipe-model radii at that stage."
-    if "stage" not in tree.attrs: raise TreebookError("stage_tree needs a tree with a per-branch `stage` array (as grown by `grow`)")
+    if "stage" not in tree.attrs:
+        raise TreebookError("stage_tree needs a tree with a per-branch `stage` array (as grown by `grow`)")
     n = int(np.searchsorted(tree.stage, k, side="right"))
     if n == 0: raise TreebookError(f"no branch is born by stage {k}; stages start at {int(tree.stage.min())}")
     tip = float(tree.end[tree.leaves, 3].min())
@@ -467,6 +601,7 @@ def species_gallery(seed: int = 0, size: int = 256, names=None):
     imgs = [render(grow_tree(n, seed=seed), view="front", size=(size, size)) for n in names]
     return image_grid(imgs, ncols=len(names), labels=names)
 
+# %% ../nbs/02_botany.ipynb #0b35b4d8
 def demo_gallery(out_dir, seed: int = 0) -> list:
     "Write `species_gallery.png` (one tree of each species) into `out_dir`; return the paths written."
     out_dir = Path(out_dir)

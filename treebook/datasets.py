@@ -29,6 +29,7 @@ def tree_seed(seed: int, i: int) -> int:
     "The growth seed of tree `i` of a dataset made with `seed`."
     return int(np.random.SeedSequence([int(seed), int(i)]).generate_state(1)[0])
 
+# %% ../nbs/02b_datasets.ipynb #018dc885
 def is_test(tree_seed_: int, test_fraction: float) -> bool:
     "Whether the tree with this seed is in the test split."
     return (tree_seed_ % 100_000) < test_fraction * 100_000
@@ -50,7 +51,8 @@ def _make_shard(job: dict) -> dict:
                split=np.array(job["split"], np.uint8), format_version=np.int64(DATASET_FORMAT))
     if job["scans"]:
         scans = [scan(t, n_points=job["n_points"], seed=s) for t, s in zip(trees, job["seeds"])]
-        for k in ("points", "branch", "junction", "foliage", "outlier"): out[k] = np.stack([getattr(x, k) for x in scans])
+        for k in ("points", "branch", "junction", "foliage", "outlier"):
+            out[k] = np.stack([getattr(x, k) for x in scans])
     if job["images"]:
         out["silhouette"] = np.stack([silhouette(t, IMAGE_SIZE) for t in trees])
         sk = [sketch(t, IMAGE_SIZE) for t in trees]
@@ -58,6 +60,7 @@ def _make_shard(job: dict) -> dict:
     _atomic_write(Path(job["path"]), lambda f: np.savez_compressed(f, **out))
     return {"file": Path(job["path"]).name, "trees": len(trees), "branches": int(out["offsets"][-1])}
 
+# %% ../nbs/02b_datasets.ipynb #92dfda09
 def _check_shard(path: Path, index) -> dict:
     "Open an existing shard and check it holds the trees it should; a `TreebookError` if not."
     try:
@@ -65,9 +68,13 @@ def _check_shard(path: Path, index) -> dict:
             idx, off = z["index"], z["offsets"]
             n = len(z["parent"])
     except Exception as e:
-        raise TreebookError(f"{path} is corrupt or incomplete ({type(e).__name__}: {e}): delete it and run again to make it anew") from None
+        raise TreebookError(
+            f"{path} is corrupt or incomplete ({type(e).__name__}: {e}): delete it and run again to make it anew"
+        ) from None
     if not np.array_equal(idx, index) or off[-1] != n:
-        raise TreebookError(f"{path} holds other trees than this dataset expects: delete it and run again to make it anew")
+        raise TreebookError(
+            f"{path} holds other trees than this dataset expects: delete it and run again to make it anew"
+        )
     return {"file": path.name, "trees": len(idx), "branches": int(n)}
 
 # %% ../nbs/02b_datasets.ipynb #5c7fa1fa
@@ -76,9 +83,11 @@ def _prepare_out(out) -> Path:
     if out.exists() and not out.is_dir(): raise TreebookError(f"{out} is a file: give a folder for the dataset")
     try: out.mkdir(parents=True, exist_ok=True)
     except OSError as e: raise TreebookError(f"cannot create the folder {out}: {e.strerror or e}") from None
-    if not os.access(out, os.W_OK | os.X_OK): raise TreebookError(f"cannot write to the folder {out}: choose a folder you may write to")
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise TreebookError(f"cannot write to the folder {out}: choose a folder you may write to")
     return out
 
+# %% ../nbs/02b_datasets.ipynb #9f78778c
 def generate_dataset(species, n: int, out, max_branches: int | None = None, stages: int = 1, scans: bool = False,
                      images: bool = False, trees: bool = False, workers: int = 2, seed: int = 0, shard_size: int = 100,
                      test_fraction: float = 0.1, n_points: int = 16384, progress: bool = True) -> dict:
@@ -86,22 +95,46 @@ def generate_dataset(species, n: int, out, max_branches: int | None = None, stag
     sp = _species(species)
     check_species(sp)
     cap = sp.max_branches if max_branches is None else max_branches
-    for name, v, lo, hi in (("n", n, 1, 10_000_000), ("max_branches", cap, 2, 100_000), ("stages", stages, 1, 1000),
-                            ("workers", workers, 1, 256), ("shard_size", shard_size, 1, 100_000), ("n_points", n_points, 1, 10_000_000)):
+    for name, v, lo, hi in (
+        ("n", n, 1, 10_000_000),
+        ("max_branches", cap, 2, 100_000),
+        ("stages", stages, 1, 1000),
+        ("workers", workers, 1, 256),
+        ("shard_size", shard_size, 1, 100_000),
+        ("n_points", n_points, 1, 10_000_000),
+    ):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
             raise TreebookError(f"{name} must be a whole number in {lo}..{hi:,}, got {v!r}")
     if not 0 <= test_fraction < 1: raise TreebookError(f"test_fraction must be in [0, 1), got {test_fraction!r}")
     out = _prepare_out(out)
-    config = {"species": sp.name, "params": sp.to_dict(), "n": int(n), "max_branches": int(cap), "stages": int(stages),
-              "scans": bool(scans), "images": bool(images), "trees": bool(trees), "seed": int(seed), "shard_size": int(shard_size),
-              "test_fraction": float(test_fraction), "n_points": int(n_points) if scans else None, "image_size": IMAGE_SIZE if images else None}
+    config = {
+        "species": sp.name,
+        "params": sp.to_dict(),
+        "n": int(n),
+        "max_branches": int(cap),
+        "stages": int(stages),
+        "scans": bool(scans),
+        "images": bool(images),
+        "trees": bool(trees),
+        "seed": int(seed),
+        "shard_size": int(shard_size),
+        "test_fraction": float(test_fraction),
+        "n_points": int(n_points) if scans else None,
+        "image_size": IMAGE_SIZE if images else None,
+    }
     mpath = out / "manifest.json"
     if mpath.exists():
-        try: old = json.loads(mpath.read_text())
-        except ValueError: raise TreebookError(f"{mpath} is not valid JSON: delete it (and the shards) or use another folder") from None
+        try:
+            old = json.loads(mpath.read_text())
+        except ValueError:
+            raise TreebookError(
+                f"{mpath} is not valid JSON: delete it (and the shards) or use another folder"
+            ) from None
         if old.get("config") != config:
             diff = sorted(k for k in config if old.get("config", {}).get(k) != config[k])
-            raise TreebookError(f"{out} holds a dataset made with other parameters ({', '.join(diff)}): use another folder, or the same parameters to resume")
+            raise TreebookError(
+                f"{out} holds a dataset made with other parameters ({', '.join(diff)}): use another folder, or the same parameters to resume"
+            )
     for p in out.glob(".*.part"): p.unlink()  # leftovers of an interrupted write
     seeds = [tree_seed(seed, i) for i in range(n)]
     split = [int(is_test(s, test_fraction)) for s in seeds]
@@ -117,7 +150,13 @@ def generate_dataset(species, n: int, out, max_branches: int | None = None, stag
     manifest = {"format": "treebook.dataset", "format_version": DATASET_FORMAT, "config": config, "complete": False}
     _atomic_write(mpath, lambda f: f.write(json.dumps(manifest, indent=1).encode()))
     from tqdm.auto import tqdm
-    bar = tqdm(total=n, initial=sum(d["trees"] for d in done.values()), desc=f"{sp.name} trees", unit="tree", disable=not progress)
+    bar = tqdm(
+        total=n,
+        initial=sum(d["trees"] for d in done.values()),
+        desc=f"{sp.name} trees",
+        unit="tree",
+        disable=not progress,
+    )
     if workers == 1 or len(jobs) <= 1:
         for j in jobs: done[j["key"]] = _make_shard(j); bar.update(len(j["index"]))
     else:
@@ -139,20 +178,29 @@ def generate_dataset(species, n: int, out, max_branches: int | None = None, stag
 def load_manifest(folder) -> dict:
     "The manifest of a dataset folder (a `TreebookError` if there is none or it is incomplete)."
     p = Path(folder) / "manifest.json"
-    if not p.exists(): raise TreebookError(f"{folder} holds no dataset (no manifest.json): make one with generate_dataset / treebook generate")
+    if not p.exists():
+        raise TreebookError(
+            f"{folder} holds no dataset (no manifest.json): make one with generate_dataset / treebook generate"
+        )
     m = json.loads(p.read_text())
-    if not m.get("complete"): raise TreebookError(f"the dataset in {folder} is incomplete: run the same generate command again to finish it")
+    if not m.get("complete"):
+        raise TreebookError(f"the dataset in {folder} is incomplete: run the same generate command again to finish it")
     return m
 
+# %% ../nbs/02b_datasets.ipynb #e7d5f662
 def load_shard(path) -> dict:
     "All arrays of one shard file."
     try:
-        with np.load(path, allow_pickle=False) as z: return {k: z[k] for k in z.files}
-    except Exception as e: raise TreebookError(f"cannot read {path} ({type(e).__name__}: {e}); is it complete?") from None
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except Exception as e:
+        raise TreebookError(f"cannot read {path} ({type(e).__name__}: {e}); is it complete?") from None
 
+# %% ../nbs/02b_datasets.ipynb #131561f0
 def load_trees(folder, split: str | None = None) -> list:
     "The trees of a dataset, in index order; `split` 'train' or 'test' keeps one split."
-    if split not in (None, "train", "test"): raise TreebookError(f"split must be 'train', 'test' or None, got {split!r}")
+    if split not in (None, "train", "test"):
+        raise TreebookError(f"split must be 'train', 'test' or None, got {split!r}")
     m, folder = load_manifest(folder), Path(folder)
     out = []
     for s in m["shards"]:

@@ -35,17 +35,22 @@ def _history(history, stages):
     if isinstance(history, Tree): final = history
     else:
         history = list(history)
-        if not history or not all(isinstance(t, Tree) for t in history): raise TreebookError("a growth history is a Tree or a non-empty list of Trees")
+        if not history or not all(isinstance(t, Tree) for t in history):
+            raise TreebookError("a growth history is a Tree or a non-empty list of Trees")
         final, stages = history[-1], len(history) if stages is None else stages
-    if "stage" not in final.attrs: raise TreebookError("a grown tree needs a per-branch `stage` array (grow it with botany.grow)")
+    if "stage" not in final.attrs:
+        raise TreebookError("a grown tree needs a per-branch `stage` array (grow it with botany.grow)")
     if not final.n: raise TreebookError("the grown tree is empty")
     st = np.asarray(final.stage, np.int64)
     stages = int(st.max()) + 1 if stages is None else int(stages)
-    if st.min() < 0 or st.max() >= stages: raise TreebookError(f"stages of birth must lie in 0..{stages - 1}; got {st.min()}..{st.max()}")
+    if st.min() < 0 or st.max() >= stages:
+        raise TreebookError(f"stages of birth must lie in 0..{stages - 1}; got {st.min()}..{st.max()}")
     if st[0] != 0 or final.parent[0] != -1: raise TreebookError("branch 0 must be the root and be born at stage 0")
-    if np.any(st[final.parent[final.parent >= 0]] > st[final.parent >= 0]): raise TreebookError("a branch is born before its parent")
+    if np.any(st[final.parent[final.parent >= 0]] > st[final.parent >= 0]):
+        raise TreebookError("a branch is born before its parent")
     return final, stages
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #67f02505
 def growth_order(tok: Tokenizer, tree: Tree, order: str = "dfs") -> np.ndarray:
     "Branch indices of a grown `tree` stage by stage, the new branches of each stage in the model's `order`."
     o = tok.order(tree, order)
@@ -54,8 +59,10 @@ def growth_order(tok: Tokenizer, tree: Tree, order: str = "dfs") -> np.ndarray:
 # %% ../nbs/10_growth_and_conditioning.ipynb #468f4fcc
 def encode_growth(tok: Tokenizer, history, stages: int | None = None, order: str = "dfs", mode: str = "incremental",
                   length: int | None = None) -> np.ndarray:
-    "Tokens of a growth `history` (a list of stage trees, or the final tree with `stage`): stages split by [STAGE] blocks."
-    if mode not in GROWTH_MODES: raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
+    """Tokens of a growth `history` (a list of stage trees, or the final tree with `stage`): stages split by [STAGE]
+    blocks."""
+    if mode not in GROWTH_MODES:
+        raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
     final, stages = _history(history, stages)
     _, frame = final.normalize()
     if mode == "incremental":
@@ -76,7 +83,8 @@ def encode_growth(tok: Tokenizer, history, stages: int | None = None, order: str
         body.append(p)
     body = np.concatenate([np.full(BLOCK, SOS)] + body + [np.full(BLOCK, EOS)]).astype(np.int64)
     if length is None: return body
-    if length < len(body): raise TreebookError(f"the growth sequence needs {len(body)} tokens, more than length={length}")
+    if length < len(body):
+        raise TreebookError(f"the growth sequence needs {len(body)} tokens, more than length={length}")
     return np.concatenate([body, np.full(length - len(body), PAD, np.int64)])
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #0e868bd3
@@ -91,6 +99,7 @@ def _stage_trees(tree: Tree, stages: int, exponent: float = 2.5) -> list:
     tree = tree.take(np.argsort(st, kind="stable"))
     return [stage_tree(tree, k, exponent) if (tree.stage <= k).any() else Tree.empty() for k in range(stages)]
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #fc97cf90
 def _blocks(tokens) -> np.ndarray:
     "The 8-token blocks between the leading [SOS] / condition tokens and the first [EOS] or [PAD]."
     a = np.asarray(tokens.detach().cpu().numpy() if hasattr(tokens, "detach") else tokens, np.int64).ravel()
@@ -100,12 +109,15 @@ def _blocks(tokens) -> np.ndarray:
     e = b + int(stop[0]) if len(stop) else len(a)
     return a[b:b + (e - b) // BLOCK * BLOCK].reshape(-1, BLOCK)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #28056ec2
 def decode_growth(tok: Tokenizer, tokens, stages: int = 10, mode: str = "incremental", exponent: float = 2.5) -> list:
     "The `stages` trees (canonical frame) of a growth token sequence; empty trees for stages with no branch."
-    if mode not in GROWTH_MODES: raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
+    if mode not in GROWTH_MODES:
+        raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
     if mode == "incremental":
         t = tok.decode(tokens)
-        if t.n and "stage" not in t.attrs: t = Tree(t.start, t.end, t.parent, check=False, stage=np.zeros(t.n, np.int16))
+        if t.n and "stage" not in t.attrs:
+            t = Tree(t.start, t.end, t.parent, check=False, stage=np.zeros(t.n, np.int16))
         return _stage_trees(t, stages, exponent)
     rows = _blocks(tokens)
     cut = np.flatnonzero((rows == STAGE).all(1))
@@ -138,7 +150,8 @@ def containment(stages, tok: Tokenizer | None = None, tol: int = 1) -> float:
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #2e91611c
 class StagedGrammar(TreeGrammar):
-    "`TreeGrammar` after `offset` condition tokens, with `stages - 1` [STAGE] blocks allowed where a branch may start; `restart`: each stage a whole tree from the root (the full layout)."
+    """`TreeGrammar` after `offset` condition tokens, with `stages - 1` [STAGE] blocks allowed where a branch may start;
+    `restart`: each stage a whole tree from the root (the full layout)."""
     def __init__(self, tok, batch: int, max_len: int, offset: int = 0, stages: int = 1, restart: bool = False):
         super().__init__(tok, batch, max_len - offset)
         self.offset, self.stages, self.restart = offset, int(stages), restart
@@ -153,7 +166,8 @@ class StagedGrammar(TreeGrammar):
             left = self.stages - 1 - self.n_stage
             more = left > 0
             ok[more, STAGE] = True; ok[more, EOS] = False
-            late = more & (u + 2 * BLOCK + BLOCK * left * (2 if self.restart else 1) > self.max_len)  # room for what must follow
+            # room for what must follow
+            late = more & (u + 2 * BLOCK + BLOCK * left * (2 if self.restart else 1) > self.max_len)
             if self.restart:                     # full layout: a stage's tree has at least its root branch
                 fresh = self.in_stage
                 ok[fresh, STAGE] = False; ok[fresh, EOS] = False; late &= ~fresh
@@ -176,7 +190,8 @@ class StagedGrammar(TreeGrammar):
 # %% ../nbs/10_growth_and_conditioning.ipynb #018dd5bd
 @contextmanager
 def wrap_embed(model: TreeTransformer, change):
-    "Within the block, `model.embed(idx, start)` returns `change(x, idx, start)` of what it returned before; such blocks nest."
+    """Within the block, `model.embed(idx, start)` returns `change(x, idx, start)` of what it returned before; such
+    blocks nest."""
     prev, base = model.__dict__.get("embed"), model.embed
     model.embed = lambda idx, start=0: change(base(idx, start), idx, start)
     try: yield model
@@ -184,25 +199,48 @@ def wrap_embed(model: TreeTransformer, change):
         if prev is None: del model.embed
         else: model.embed = prev
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #9312255d
 @contextmanager
 def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
-    "Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8), and `bias` (B, dim) to those of every position."
+    """Within the block, `model` adds `prefix` (B, P, dim) to the embeddings of positions 0..P-1 (P a multiple of 8),
+    and `bias` (B, dim) to those of every position."""
     if prefix is None and bias is None: yield model; return
     P = 0 if prefix is None else prefix.shape[1]
-    if P % BLOCK: raise TreebookError(f"a condition prefix must be a whole number of branch blocks (a multiple of 8), got {P}")
+    if P % BLOCK:
+        raise TreebookError(f"a condition prefix must be a whole number of branch blocks (a multiple of 8), got {P}")
     def add(x, idx, start):
-        if bias is not None: x = x + bias[:, None]  # one vector for the whole sequence (broadcast over a batch of samples)
+        # one vector for the whole sequence (broadcast over a batch of samples)
+        if bias is not None: x = x + bias[:, None]
         k = min(P - start, idx.shape[1])
         if k <= 0: return x
         pre = prefix[:, start:start + k].expand(x.shape[0], -1, -1)
         return torch.cat([x[:, :k] + pre, x[:, k:]], 1)
     with wrap_embed(model, add): yield model
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #0fab92b1
 @torch.no_grad()
-def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, bias=None, stages: int = 1,
-             mode: str = "incremental", min_new: int = 0, max_len: int | None = None, temperature: float = 1.0, top_k: int | None = None,
-             top_p: float | None = None, structure: bool = True, fair_stops: bool = True, seed: int = 0, progress: bool = False) -> list:
-    "`n` token sequences (without the condition positions) continuing `prompt` (default: 8 [SOS]) after a condition `prefix` (and with a condition `bias` on every position)."
+def generate(
+    model: TreeTransformer,
+    n: int = 1,
+    *,
+    tok: Tokenizer,
+    prompt=None,
+    prefix=None,
+    bias=None,
+    stages: int = 1,
+    mode: str = "incremental",
+    min_new: int = 0,
+    max_len: int | None = None,
+    temperature: float = 1.0,
+    top_k: int | None = None,
+    top_p: float | None = None,
+    structure: bool = True,
+    fair_stops: bool = True,
+    seed: int = 0,
+    progress: bool = False
+) -> list:
+    """`n` token sequences (without the condition positions) continuing `prompt` (default: 8 [SOS]) after a condition
+    `prefix` (and with a condition `bias` on every position)."""
     c = model.config
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
     if temperature < 0: raise TreebookError(f"temperature must be >= 0, got {temperature}")
@@ -213,20 +251,25 @@ def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None,
     prompt = np.atleast_2d(np.asarray([SOS] * BLOCK if prompt is None else prompt, np.int64))
     if prompt.shape[0] == 1: prompt = np.repeat(prompt, n, 0)
     if prompt.shape[0] != n: raise TreebookError(f"prompt has {prompt.shape[0]} rows for n={n}: give one row or n")
-    if prompt.shape[1] < BLOCK or (prompt[:, :BLOCK] != SOS).any(): raise TreebookError("a prompt starts with 8 [SOS] tokens")
-    if prompt.min() < 0 or prompt.max() >= c.vocab_size: raise TreebookError(f"prompt tokens must lie in 0..{c.vocab_size - 1}")
+    if prompt.shape[1] < BLOCK or (prompt[:, :BLOCK] != SOS).any():
+        raise TreebookError("a prompt starts with 8 [SOS] tokens")
+    if prompt.min() < 0 or prompt.max() >= c.vocab_size:
+        raise TreebookError(f"prompt tokens must lie in 0..{c.vocab_size - 1}")
     full = np.concatenate([np.full((n, P0), COND, np.int64), prompt], 1)
     P = full.shape[1]
     max_len = c.max_len if max_len is None else int(max_len)
     if max_len > c.max_len: raise TreebookError(f"max_len {max_len} is longer than the model's max_len {c.max_len}")
     if P + 2 * BLOCK > max_len:
-        raise TreebookError(f"the prompt ({P - P0} tokens{f' after {P0} condition positions' if P0 else ''}) leaves no room "
-                            f"below the model's max_len {max_len}: give a smaller partial tree")
+        raise TreebookError(
+            f"the prompt ({P - P0} tokens{f' after {P0} condition positions' if P0 else ''}) leaves no room "
+            f"below the model's max_len {max_len}: give a smaller partial tree"
+        )
     model.eval()
     gen = torch.Generator().manual_seed(seed)
     seqs = torch.full((n, max_len), PAD, dtype=torch.long)
     seqs[:, :P] = torch.from_numpy(full)
-    if mode not in GROWTH_MODES: raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
+    if mode not in GROWTH_MODES:
+        raise TreebookError(f"unknown growth mode {mode!r}: use one of {', '.join(GROWTH_MODES)}")
     grammar = StagedGrammar(tok, n, max_len, P0, stages, restart=mode == "full") if structure else None
     if grammar:
         for t in range(P0, P): grammar.observe(full[:, t], t)
@@ -263,17 +306,38 @@ def on_device(batch, device):
     if isinstance(batch, dict): return {k: on_device(v, device) for k, v in batch.items()}
     return batch
 
-def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e-3, warmup: int = 50, weight_decay: float = 0.1,
-        grad_clip: float = 1.0, ckpt_every: int = 25, log_every: int = 5, resume: bool = True, time_limit: float | None = None,
-        progress: bool = True, meta: dict | None = None) -> dict:
+# %% ../nbs/10_growth_and_conditioning.ipynb #83fcc723
+def fit(
+    model: torch.nn.Module,
+    batch,
+    loss,
+    out_dir,
+    steps: int,
+    lr: float = 2e-3,
+    warmup: int = 50,
+    weight_decay: float = 0.1,
+    grad_clip: float = 1.0,
+    ckpt_every: int = 25,
+    log_every: int = 5,
+    resume: bool = True,
+    time_limit: float | None = None,
+    progress: bool = True,
+    meta: dict | None = None,
+) -> dict:
     """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a summary.
     Batches follow the model to its device: move the model to a GPU first to train there."""
     from treebook.train import lr_at
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
     last, log_path = out / "last.pt", out / "log.csv"
     params = [p for p in model.parameters() if p.requires_grad]
-    opt = torch.optim.AdamW([{"params": [p for p in params if p.dim() >= 2], "weight_decay": weight_decay},
-                             {"params": [p for p in params if p.dim() < 2], "weight_decay": 0.0}], lr=lr, betas=(0.9, 0.95))
+    opt = torch.optim.AdamW(
+        [
+            {"params": [p for p in params if p.dim() >= 2], "weight_decay": weight_decay},
+            {"params": [p for p in params if p.dim() < 2], "weight_decay": 0.0},
+        ],
+        lr=lr,
+        betas=(0.9, 0.95),
+    )
     step, seconds, dev = 0, 0.0, next(model.parameters()).device
     if last.exists():
         if not resume: raise TreebookError(f"{out} already holds a run (last.pt): resume it or choose another folder")
@@ -283,7 +347,13 @@ def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e
         _atomic_write(log_path, lambda f: f.write(b"step,lr,loss,seconds\n"))
     t0, running = time.time(), []
     def save():
-        ck = {"model": model.state_dict(), "opt": opt.state_dict(), "step": step, "seconds": seconds + time.time() - t0, "meta": meta or {}}
+        ck = {
+            "model": model.state_dict(),
+            "opt": opt.state_dict(),
+            "step": step,
+            "seconds": seconds + time.time() - t0,
+            "meta": meta or {},
+        }
         _atomic_write(last, lambda f: torch.save(ck, f))
     bar = tqdm(total=steps, initial=step, desc="fit", disable=not progress)
     while step < steps:
@@ -294,13 +364,21 @@ def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e
         if grad_clip: torch.nn.utils.clip_grad_norm_(params, grad_clip)
         opt.step(); step += 1; running.append(float(value)); bar.update(1); bar.set_postfix(loss=f"{running[-1]:.3f}")
         if step % log_every == 0 or step == steps:
-            with open(log_path, "a") as f: f.write(f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},{seconds + time.time() - t0:.1f}\n")
+            with open(log_path, "a") as f:
+                f.write(
+                    f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},{seconds + time.time() - t0:.1f}\n"
+                )
             running = []
         if step % ckpt_every == 0 or step == steps: save()
         if time_limit and time.time() - t0 > time_limit: save(); break
     bar.close(); model.eval()
     rows = list(csv.DictReader(open(log_path)))
-    return {"step": step, "steps": steps, "seconds": seconds + time.time() - t0, "loss": float(rows[-1]["loss"]) if rows else None}
+    return {
+        "step": step,
+        "steps": steps,
+        "seconds": seconds + time.time() - t0,
+        "loss": float(rows[-1]["loss"]) if rows else None,
+    }
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #8dfb6414
 def growth_batch(trees, tok: Tokenizer, step: int, batch_size: int = 8, seed: int = 0, stages: int = 10,
@@ -309,10 +387,14 @@ def growth_batch(trees, tok: Tokenizer, step: int, batch_size: int = 8, seed: in
     from treebook.train import augment
     rng = np.random.default_rng((seed, step))
     pick_ = rng.choice(len(trees), size=batch_size, replace=len(trees) < batch_size)
-    seqs = [encode_growth(tok, augment(trees[i], seed, step, int(i)) if augment_data else trees[i], stages, order, mode) for i in pick_]
+    seqs = [
+        encode_growth(tok, augment(trees[i], seed, step, int(i)) if augment_data else trees[i], stages, order, mode)
+        for i in pick_
+    ]
     L = max(len(s) for s in seqs)
     return torch.from_numpy(np.stack([np.concatenate([s, np.full(L - len(s), PAD)]) for s in seqs]))
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #2ace2cae
 def lm_loss(model, seqs) -> torch.Tensor:
     "Cross-entropy of next-token prediction over non-[PAD] targets (`train.sequence_loss`)."
     from treebook.train import sequence_loss
@@ -325,6 +407,7 @@ def _resolve(model):
     from treebook.train import load_pretrained
     return load_pretrained(str(model))
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #ea474465
 def extend_context(net: TreeTransformer, max_len: int) -> TreeTransformer:
     "A copy of `net` with room for `max_len` tokens; new branch-position embeddings copy the last trained one."
     from dataclasses import replace
@@ -337,15 +420,27 @@ def extend_context(net: TreeTransformer, max_len: int) -> TreeTransformer:
     return new.eval()
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #a959f257
-def grow_sequence(model="elm-grow", seed: int = 0, stages: int = 10, temperature: float = 0.9, top_p: float | None = 0.95,
-                  top_k: int | None = None, progress: bool = False) -> list:
-    "The `stages` trees (canonical frame) of one growth sequence sampled from a growth model (name, path or (net, tok))."
+def grow_sequence(
+    model="elm-grow",
+    seed: int = 0,
+    stages: int = 10,
+    temperature: float = 0.9,
+    top_p: float | None = 0.95,
+    top_k: int | None = None,
+    progress: bool = False,
+) -> list:
+    """The `stages` trees (canonical frame) of one growth sequence sampled from a growth model (name, path or (net,
+    tok))."""
     net, tok = _resolve(model)
-    seq = generate(net, 1, tok=tok, stages=stages, temperature=temperature, top_p=top_p, top_k=top_k, seed=seed, progress=progress)[0]
+    seq = generate(
+        net, 1, tok=tok, stages=stages, temperature=temperature, top_p=top_p, top_k=top_k, seed=seed, progress=progress
+    )[0]
     return decode_growth(tok, seq, stages)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #be0848d1
 def stage_picture(stages, k: int, size: int = 256):
-    "A PIL image of stage `k` of a growth history: the fixed front camera, old wood brown, the stage's new branches green."
+    """A PIL image of stage `k` of a growth history: the fixed front camera, old wood brown, the stage's new branches
+    green."""
     from PIL import Image
     from treebook.scan import silhouette
     t = stages[k]
@@ -356,8 +451,10 @@ def stage_picture(stages, k: int, size: int = 256):
         if born.any(): img[silhouette(t.take(np.flatnonzero(born), tol=1e9), size) > 0] = (60, 160, 60)
     return Image.fromarray(img)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #1fdf8da3
 def write_growth(stages, out_dir, meshes: bool = True, size: int = 256) -> list:
-    "Write stage_XX.npz (and .obj meshes), growth_filmstrip.png and growth.gif for a list of stage trees; returns the paths."
+    """Write stage_XX.npz (and .obj meshes), growth_filmstrip.png and growth.gif for a list of stage trees; returns the
+    paths."""
     from io import BytesIO
     from treebook.render import image_grid
     out = Path(out_dir)
@@ -381,24 +478,33 @@ def write_growth(stages, out_dir, meshes: bool = True, size: int = 256) -> list:
 # %% ../nbs/10_growth_and_conditioning.ipynb #e39cc773
 def _as_partial(partial) -> Tree:
     if isinstance(partial, (str, Path)): partial = Tree.load(partial)
-    if not isinstance(partial, Tree): raise TreebookError(f"a partial tree must be a Tree or a .npz/.json path, got {type(partial).__name__}")
-    if not partial.n: raise TreebookError("the partial tree is empty: give at least its first branch (the trunk's base)")
+    if not isinstance(partial, Tree):
+        raise TreebookError(f"a partial tree must be a Tree or a .npz/.json path, got {type(partial).__name__}")
+    if not partial.n:
+        raise TreebookError("the partial tree is empty: give at least its first branch (the trunk's base)")
     roots = int((partial.parent < 0).sum())
-    if roots != 1: raise TreebookError(f"the partial tree has {roots} roots: completion needs one connected tree grown from one root")
+    if roots != 1:
+        raise TreebookError(
+            f"the partial tree has {roots} roots: completion needs one connected tree grown from one root"
+        )
     return Tree(partial.start, partial.end, partial.parent)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #ceb19252
 def _canonical_ok(tree: Tree, tok: Tokenizer) -> bool:
     "Whether `tree` already sits in the canonical frame the tokenizer's bins were fitted in."
     lo, hi = tree.bounds()
     inside = np.all(lo >= tok.edges[:3, 0]) and np.all(hi <= tok.edges[:3, -1])
     return bool(inside and np.allclose(tree.start[0, :3], 0, atol=1e-6) and hi[2] <= 1.05)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #e012a6b5
 def complete(partial, n: int = 4, seed: int = 0, model="elm", order: str = "dfs", temperature: float = 0.9,
              top_p: float | None = 0.95, top_k: int | None = None, frame: str = "auto", min_new: int = 1,
              progress: bool = False) -> list:
-    "`n` completions of a partial tree (Tree or path) by a model (name, path or (net, tok)); each keeps the partial tree's branches exactly."
+    """`n` completions of a partial tree (Tree or path) by a model (name, path or (net, tok)); each keeps the partial
+    tree's branches exactly."""
     from treebook.tree import Frame
-    if frame not in ("auto", "canonical", "own"): raise TreebookError(f"frame must be 'auto', 'canonical' or 'own', got {frame!r}")
+    if frame not in ("auto", "canonical", "own"):
+        raise TreebookError(f"frame must be 'auto', 'canonical' or 'own', got {frame!r}")
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
     part = _as_partial(partial)
     net, tok = _resolve(model)
@@ -423,7 +529,8 @@ def complete(partial, n: int = 4, seed: int = 0, model="elm", order: str = "dfs"
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #1d03d883
 def tree_picture(tree: Tree, size: int = 256):
-    "A PIL front view of a tree in its canonical frame; branches with a True per-branch `prompt` brown, the others green."
+    """A PIL front view of a tree in its canonical frame; branches with a True per-branch `prompt` brown, the others
+    green."""
     from PIL import Image
     from treebook.scan import silhouette
     img = np.full((size, size, 3), 255, np.uint8)
@@ -434,14 +541,18 @@ def tree_picture(tree: Tree, size: int = 256):
         if given.any(): img[silhouette(t.take(np.flatnonzero(given), tol=1e9), size) > 0] = (110, 80, 50)
     return Image.fromarray(img)
 
+# %% ../nbs/10_growth_and_conditioning.ipynb #99d59522
 def write_trees(trees, out_dir, stem: str = "tree", meshes: bool = True, first=None, size: int = 256) -> list:
-    "Write `stem_XX.npz` (+ .obj) for each tree and `stem.png` (the tree `first`, e.g. the partial tree, leading); returns the paths."
+    """Write `stem_XX.npz` (+ .obj) for each tree and `stem.png` (the tree `first`, e.g. the partial tree, leading);
+    returns the paths."""
     from treebook.render import image_grid
     out = Path(out_dir)
     try: out.mkdir(parents=True, exist_ok=True)
     except OSError as e: raise TreebookError(f"cannot create the folder {out}: {e}") from None
     paths, pics, labels = [], [], []
-    if first is not None: pics.append(tree_picture(Tree(first.start, first.end, first.parent, prompt=np.ones(first.n, bool)), size)); labels.append(f"given ({first.n})")
+    if first is not None:
+        pics.append(tree_picture(Tree(first.start, first.end, first.parent, prompt=np.ones(first.n, bool)), size))
+        labels.append(f"given ({first.n})")
     for i, t in enumerate(trees):
         if not t.n: continue
         paths.append(t.save(out / f"{stem}_{i:02d}.npz"))
@@ -456,7 +567,8 @@ def write_trees(trees, out_dir, stem: str = "tree", meshes: bool = True, first=N
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #a10f5692
 def demo_growth(out_dir, seed: int = 0) -> list:
-    "Growth filmstrip + GIF (elm-grow, else procedural) and, if shipped, one image-to-tree picture into `out_dir`; returns the paths."
+    """Growth filmstrip + GIF (elm-grow, else procedural) and, if shipped, one image-to-tree picture into `out_dir`;
+    returns the paths."""
     from treebook.train import WEIGHTS
     out = Path(out_dir)
     try: out.mkdir(parents=True, exist_ok=True)

@@ -43,8 +43,10 @@ class ModelConfig:
         if self.dim <= 0 or self.heads <= 0 or self.dim % self.heads:
             raise TreebookError(f"dim ({self.dim}) must be a positive multiple of heads ({self.heads})")
         if self.depth < 2 * len(self.factors) + 1:
-            raise TreebookError(f"arch {self.arch!r} needs depth >= {2 * len(self.factors) + 1} "
-                                f"(one layer down and one up per scale, at least one in the bottleneck); got {self.depth}")
+            raise TreebookError(
+                f"arch {self.arch!r} needs depth >= {2 * len(self.factors) + 1} "
+                f"(one layer down and one up per scale, at least one in the bottleneck); got {self.depth}"
+            )
         if self.max_len < 1 or self.vocab_size < 1: raise TreebookError("max_len and vocab_size must be positive")
 
     @property
@@ -73,12 +75,14 @@ class KVCache:
     def append(self, k, v):
         "Store the new keys and values; return all keys, values and the mask for the new queries (None: see all)."
         n0, t = self.n, k.shape[2]
-        if n0 + t > self.k.shape[2]: raise TreebookError(f"the cache holds {self.k.shape[2]} positions; cannot add {t} to {n0}")
+        if n0 + t > self.k.shape[2]:
+            raise TreebookError(f"the cache holds {self.k.shape[2]} positions; cannot add {t} to {n0}")
         self.k[:, :, n0:n0 + t], self.v[:, :, n0:n0 + t] = k, v
         self.n = n0 + t
         mask = None if t == 1 else torch.ones(t, self.n, dtype=torch.bool, device=k.device).tril(diagonal=n0)
         return self.k[:, :, :self.n], self.v[:, :, :self.n], mask
 
+# %% ../nbs/04_hourglass.ipynb #74101b66
 class Attention(nn.Module):
     "Causal multi-head self-attention."
     def __init__(self, c: ModelConfig):
@@ -91,12 +95,15 @@ class Attention(nn.Module):
         B, T, C = x.shape
         q, k, v = self.qkv(x).view(B, T, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)
         if cache is None:
-            y = F.scaled_dot_product_attention(q, k, v, is_causal=True, dropout_p=self.dropout if self.training else 0.0)
+            y = F.scaled_dot_product_attention(
+                q, k, v, is_causal=True, dropout_p=self.dropout if self.training else 0.0
+            )
         else:
             k, v, mask = cache.append(k, v)
             y = F.scaled_dot_product_attention(q, k, v, attn_mask=mask)
         return self.proj(y.transpose(1, 2).reshape(B, T, C))
 
+# %% ../nbs/04_hourglass.ipynb #fda3bb3d
 class Block(nn.Module):
     "A pre-norm transformer layer: causal self-attention, then a feed-forward network."
     def __init__(self, c: ModelConfig):
@@ -118,13 +125,15 @@ def shorten(x, k: int):
     x = F.pad(x, (0, 0, k - 1, 0))[:, :L]
     return x.view(B, L // k, k, C).mean(2)
 
+# %% ../nbs/04_hourglass.ipynb #34f2ecd4
 def upsample(x, k: int):
     "Duplicate each vector of `x` (B, L/k, C) `k` times."
     return x.repeat_interleave(k, dim=1)
 
 # %% ../nbs/04_hourglass.ipynb #4717f46c
 class TreeTransformer(nn.Module):
-    "The hourglass transformer of HourglassTree (or, with arch='pt', a plain transformer): tokens (B, L) -> logits (B, L, vocab)."
+    """The hourglass transformer of HourglassTree (or, with arch='pt', a plain transformer): tokens (B, L) -> logits (B,
+    L, vocab)."""
     def __init__(self, config: ModelConfig):
         super().__init__()
         c = self.config = config
@@ -193,7 +202,8 @@ def check_causal(model, length: int = 21, batch: int = 2, seed: int = 0, tol: fl
         for t in range(length - 1):
             x2 = x.clone(); x2[:, t + 1:] = torch.randint(0, V, (batch, length - t - 1), generator=g)
             worst = max(worst, (model(x2)[:, :t + 1] - base[:, :t + 1]).abs().max().item())
-    if worst > tol: raise AssertionError(f"logits up to t moved by {worst:.3g} when later tokens changed: the model looks ahead")
+    if worst > tol:
+        raise AssertionError(f"logits up to t moved by {worst:.3g} when later tokens changed: the model looks ahead")
     return worst
 
 # %% ../nbs/04_hourglass.ipynb #685ffb27
@@ -216,6 +226,7 @@ class DecodeState:
         self.out = [torch.zeros(batch, cap, c.dim, dtype=dt, device=dev) for cap in caps[1:]]  # coarse outputs
         self.capacity = capacity
 
+# %% ../nbs/04_hourglass.ipynb #56f70972
 @patch
 @torch.no_grad()
 def extend(self: TreeTransformer, idx, state: DecodeState):
@@ -258,12 +269,15 @@ def check_cache(model, length: int = 29, prompt: int = 11, batch: int = 2, seed:
 @patch
 def save(self: TreeTransformer, path, **meta) -> Path:
     "Write config and weights to `path` atomically; `meta` (JSON-like) is stored alongside, for a model card."
-    try: json.dumps(meta)
-    except TypeError as e: raise TreebookError(f"checkpoint metadata must be plain numbers, strings, lists and dicts: {e}") from None
+    try:
+        json.dumps(meta)
+    except TypeError as e:
+        raise TreebookError(f"checkpoint metadata must be plain numbers, strings, lists and dicts: {e}") from None
     ckpt = {"format": "treebook.hourglass", "version": CHECKPOINT_VERSION, "config": asdict(self.config),
             "state_dict": {k: v.detach().cpu() for k, v in self.state_dict().items()}, "meta": meta}
     return _atomic_write(Path(path), lambda f: torch.save(ckpt, f))
 
+# %% ../nbs/04_hourglass.ipynb #1eeb6e44
 @patch(cls_method=True)
 def load(cls: TreeTransformer, path, config: ModelConfig | None = None) -> "TreeTransformer":
     "A model read from `path`; with `config`, the stored config must equal it."
@@ -271,8 +285,10 @@ def load(cls: TreeTransformer, path, config: ModelConfig | None = None) -> "Tree
     if not path.is_file(): raise TreebookError(f"checkpoint {path} does not exist")
     try: ckpt = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:
-        raise TreebookError(f"cannot read checkpoint {path}: it is truncated or not a treebook checkpoint ({type(e).__name__}); "
-                            "save it again with TreeTransformer.save") from None
+        raise TreebookError(
+            f"cannot read checkpoint {path}: it is truncated or not a treebook checkpoint ({type(e).__name__}); "
+            "save it again with TreeTransformer.save"
+        ) from None
     if not isinstance(ckpt, dict) or ckpt.get("format") != "treebook.hourglass":
         raise TreebookError(f"{path} is not a treebook hourglass checkpoint")
     if ckpt.get("version") != CHECKPOINT_VERSION:

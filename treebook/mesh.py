@@ -22,13 +22,16 @@ def _unit(v):
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     return np.divide(v, n, out=np.zeros_like(v), where=n > 1e-12)
 
+# %% ../nbs/01_mesh.ipynb #0f4a5316
 def _perpendicular(t):
     "A unit vector perpendicular to the unit vector `t`."
     a = np.array([1.0, 0, 0]) if abs(t[0]) < 0.9 else np.array([0, 1.0, 0])
     return _unit(np.cross(t, a))
 
+# %% ../nbs/01_mesh.ipynb #401e5d7c
 def continuation(tree: Tree) -> np.ndarray:
-    "For each branch, the child that continues its chain (largest start radius, then best aligned, then lowest index), or -1."
+    """For each branch, the child that continues its chain (largest start radius, then best aligned, then lowest index),
+    or -1."""
     d = _unit((tree.end[:, :3] - tree.start[:, :3]).astype(np.float64))
     cont = np.full(tree.n, -1, dtype=np.int64)
     for i, kids in enumerate(tree.children):
@@ -80,6 +83,7 @@ def _tube_faces(a, b, m):
     t2 = np.stack([A + j1, B + j1, B + j], -1)
     return np.concatenate([t1, t2], 1).reshape(-1, 3)
 
+# %% ../nbs/01_mesh.ipynb #eb6866d1
 def _cap_faces(rings, centres, m, flip):
     "Triangle fans closing `rings` around vertex ids `centres`; `flip` for caps facing backwards along the tangent."
     j = np.arange(m); j1 = (j + 1) % m
@@ -103,16 +107,26 @@ def _leaves(tree: Tree, per_tip: int, size: float, seed: int):
     axis = _unit(side + np.array([0, 0, 0.6]) + 0.3 * d)  # the blade's midrib: out to the side, tilted up
     width = _unit(np.cross(axis, d + rng.normal(0, 0.3, d.shape)))
     L = size * rng.uniform(0.7, 1.3, (len(tips), 1))
-    quad = np.stack([base, base + axis * L * 0.5 + width * L * 0.22, base + axis * L, base + axis * L * 0.5 - width * L * 0.22], 1)
+    quad = np.stack(
+        [base, base + axis * L * 0.5 + width * L * 0.22, base + axis * L, base + axis * L * 0.5 - width * L * 0.22], 1
+    )
     k = np.arange(len(tips))[:, None] * 4
     front = np.concatenate([k + [0, 1, 2], k + [0, 2, 3]])
     faces = np.concatenate([front, front[:, ::-1]])
     return quad.reshape(-1, 3), faces, np.tile(np.repeat(tips, 1), 4)
 
 # %% ../nbs/01_mesh.ipynb #cf28a89a
-def tree_mesh(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip: int = 4, leaf_size: float | None = None,
-              min_radius: float | None = None, seed: int = 0) -> trimesh.Trimesh:
-    "A mesh of tapered generalized cylinders along the branches (watertight without leaves), bark and leaf colours per face."
+def tree_mesh(
+    tree: Tree,
+    sides: int = 10,
+    leaves: bool = False,
+    leaves_per_tip: int = 4,
+    leaf_size: float | None = None,
+    min_radius: float | None = None,
+    seed: int = 0,
+) -> trimesh.Trimesh:
+    """A mesh of tapered generalized cylinders along the branches (watertight without leaves), bark and leaf colours per
+    face."""
     if not isinstance(tree, Tree): raise TreebookError(f"tree_mesh needs a Tree, got {type(tree).__name__}")
     if not tree.n: raise TreebookError("cannot mesh an empty tree")
     if not 3 <= sides <= 256: raise TreebookError(f"sides must be between 3 and 256, got {sides}")
@@ -121,7 +135,9 @@ def tree_mesh(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip:
     centre, tangent, u, radius, start_ring, end_ring = _rings(tree, min_radius)
     v = np.cross(tangent, u)
     theta = 2 * np.pi * np.arange(m) / m
-    ring_v = centre[:, None] + radius[:, None, None] * (np.cos(theta)[None, :, None] * u[:, None] + np.sin(theta)[None, :, None] * v[:, None])
+    ring_v = centre[:, None] + radius[:, None, None] * (
+        np.cos(theta)[None, :, None] * u[:, None] + np.sin(theta)[None, :, None] * v[:, None]
+    )
     verts = [ring_v.reshape(-1, 3)]
     nv = len(verts[0])
     faces = [_tube_faces(start_ring, end_ring, m)]
@@ -151,25 +167,43 @@ def export_mesh(obj, path, **mesh_kw) -> Path:
     OBJ and PLY keep double precision (map coordinates); glTF stores float32."""
     path = Path(path)
     ext = path.suffix.lower()
-    if ext not in MESH_FORMATS: raise TreebookError(f"cannot export a mesh as {path.name!r}: use one of {', '.join(MESH_FORMATS)}")
+    if ext not in MESH_FORMATS:
+        raise TreebookError(f"cannot export a mesh as {path.name!r}: use one of {', '.join(MESH_FORMATS)}")
     mesh = tree_mesh(obj, **mesh_kw).apply_translation(obj.origin) if isinstance(obj, Tree) else obj
-    if not isinstance(mesh, trimesh.Trimesh): raise TreebookError(f"export_mesh needs a Tree or a trimesh.Trimesh, got {type(obj).__name__}")
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise TreebookError(f"export_mesh needs a Tree or a trimesh.Trimesh, got {type(obj).__name__}")
     far = ext == ".ply" and too_far(np.abs(mesh.vertices).max(), mesh.scale)
     data = _ply_double(mesh) if far else mesh.export(file_type=ext[1:])   # trimesh writes PLY vertices in float32
     return _atomic_write(path, lambda f: f.write(data.encode() if isinstance(data, str) else data))
 
+# %% ../nbs/01_mesh.ipynb #50b94b08
 def _ply_double(mesh) -> bytes:
     "A binary PLY of `mesh` with double-precision vertices (and its vertex colours, if it has them)."
     v = np.asarray(mesh.vertices, "<f8"); f = np.asarray(mesh.faces, "<i4")
-    rgb = np.asarray(mesh.visual.vertex_colors)[:, :3].astype(np.uint8) if mesh.visual.kind in ("vertex", "face") else None
-    vdt = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")] + ([("red", "u1"), ("green", "u1"), ("blue", "u1")] if rgb is not None else [])
+    rgb = (
+        np.asarray(mesh.visual.vertex_colors)[:, :3].astype(np.uint8)
+        if mesh.visual.kind in ("vertex", "face")
+        else None
+    )
+    vdt = [("x", "<f8"), ("y", "<f8"), ("z", "<f8")] + (
+        [("red", "u1"), ("green", "u1"), ("blue", "u1")] if rgb is not None else []
+    )
     vert = np.empty(len(v), vdt); vert["x"], vert["y"], vert["z"] = v.T
     if rgb is not None: vert["red"], vert["green"], vert["blue"] = rgb.T
     face = np.empty(len(f), [("n", "u1"), ("i", "<i4", (3,))]); face["n"], face["i"] = 3, f
-    head = ["ply", "format binary_little_endian 1.0", "comment treebook mesh in map coordinates (double precision)", f"element vertex {len(v)}",
-            *[f"property {'double' if t == '<f8' else 'uchar'} {k}" for k, t in vdt], f"element face {len(f)}", "property list uchar int vertex_indices", "end_header"]
+    head = [
+        "ply",
+        "format binary_little_endian 1.0",
+        "comment treebook mesh in map coordinates (double precision)",
+        f"element vertex {len(v)}",
+        *[f"property {'double' if t == '<f8' else 'uchar'} {k}" for k, t in vdt],
+        f"element face {len(f)}",
+        "property list uchar int vertex_indices",
+        "end_header",
+    ]
     return ("\n".join(head) + "\n").encode() + vert.tobytes() + face.tobytes()
 
+# %% ../nbs/01_mesh.ipynb #23ea9b1d
 def skeleton_nodes(tree: Tree):
     "(nodes (k, 4): x y z radius, edges (n, 2)): one node per branch end plus one per chain root, one edge per branch."
     if not tree.n: raise TreebookError("cannot write the skeleton of an empty tree")
@@ -179,10 +213,12 @@ def skeleton_nodes(tree: Tree):
     start_node[roots] = tree.n + np.arange(len(roots))
     return nodes, np.stack([start_node, np.arange(tree.n)], 1)
 
+# %% ../nbs/01_mesh.ipynb #89b633fc
 def export_skeleton(tree: Tree, path) -> Path:
     "Write the tree's skeleton as an ASCII PLY: vertices x y z radius, edges vertex1 vertex2."
     path = Path(path)
-    if path.suffix.lower() != ".ply": raise TreebookError(f"a skeleton is written as .ply, not {path.suffix or 'no extension'}")
+    if path.suffix.lower() != ".ply":
+        raise TreebookError(f"a skeleton is written as .ply, not {path.suffix or 'no extension'}")
     nodes, edges = skeleton_nodes(tree)
     far = bool(tree.origin.any())   # map coordinates: the origin added back, in double precision
     nodes = nodes.astype(np.float64) + np.r_[tree.origin, 0] if far else nodes
@@ -190,9 +226,12 @@ def export_skeleton(tree: Tree, path) -> Path:
     head = ["ply", "format ascii 1.0", "comment treebook skeleton: one vertex per node, one edge per branch",
             f"element vertex {len(nodes)}", *[f"property {kind} {k}" for k in ("x", "y", "z", "radius")],
             f"element edge {len(edges)}", "property int vertex1", "property int vertex2", "end_header"]
-    body = [" ".join(f"{v:.{digits}g}" for v in row) for row in nodes.tolist()] + [f"{a} {b}" for a, b in edges.tolist()]
+    body = [" ".join(f"{v:.{digits}g}" for v in row) for row in nodes.tolist()] + [
+        f"{a} {b}" for a, b in edges.tolist()
+    ]
     return _atomic_write(path, lambda f: f.write(("\n".join(head + body) + "\n").encode()))
 
+# %% ../nbs/01_mesh.ipynb #86c8d749
 def read_skeleton(path) -> Tree:
     "Read a skeleton PLY written by `export_skeleton` back into a Tree (edges in file order)."
     path = Path(path)
@@ -205,7 +244,9 @@ def read_skeleton(path) -> Tree:
         verts = np.array([l.split() for l in lines[end + 1:end + 1 + nv]], dtype=np.float64).reshape(nv, 4)
         edges = np.array([l.split() for l in lines[end + 1 + nv:end + 1 + nv + ne]], dtype=np.int64).reshape(ne, 2)
     except (ValueError, KeyError, IndexError) as e:
-        raise TreebookError(f"{path} is not a treebook skeleton PLY (x y z radius vertices and an edge list): {e}") from None
+        raise TreebookError(
+            f"{path} is not a treebook skeleton PLY (x y z radius vertices and an edge list): {e}"
+        ) from None
     o = origin_for(verts[:, :3])   # map coordinates come back about an origin, as they were written
     if o is None: return Tree.from_segments(verts[edges[:, 0]], verts[edges[:, 1]])
     verts[:, :3] -= o

@@ -41,15 +41,18 @@ def sample_surface(tree: Tree, n: int = 2048, seed: int = 0) -> np.ndarray:
     r = (a0 + t * (a1 - a0))[:, None]
     return s[b, :3] + t[:, None] * d + r * (np.cos(phi) * uu + np.sin(phi) * vv)
 
+# %% ../nbs/06_metrics.ipynb #6afdc872
 def normalize_cloud(p: np.ndarray) -> np.ndarray:
     "Centre a cloud on its bounding-box centre and scale it into the sphere of radius 0.5."
     p = np.asarray(p, dtype=np.float64)
-    if p.ndim != 2 or p.shape[1] != 3 or not len(p): raise TreebookError(f"a cloud must be an (m, 3) array, got shape {p.shape}")
+    if p.ndim != 2 or p.shape[1] != 3 or not len(p):
+        raise TreebookError(f"a cloud must be an (m, 3) array, got shape {p.shape}")
     if not np.isfinite(p).all(): raise TreebookError("the cloud holds NaN or infinity")
     c = (p.min(0) + p.max(0)) / 2
     r = np.linalg.norm(p - c, axis=1).max()
     return (p - c) * (0.5 / r) if r > 0 else p - c
 
+# %% ../nbs/06_metrics.ipynb #f775b324
 def tree_clouds(trees, n: int = 2048, seed: int = 0, progress: bool = True) -> np.ndarray:
     "(len(trees), n, 3) normalised surface clouds of Trees (or paths of tree .npz files)."
     from tqdm.auto import tqdm
@@ -60,8 +63,11 @@ def tree_clouds(trees, n: int = 2048, seed: int = 0, progress: bool = True) -> n
     return out
 
 # %% ../nbs/06_metrics.ipynb #1eff0282
-def chamfer(a, b, tree_a: cKDTree | None = None, tree_b: cKDTree | None = None, bound: float = np.inf, chunk: int = 512) -> float:
-    "Chamfer distance: mean squared nearest distance from a to b, plus from b to a; stops early (returning a value >= `bound`) once the sum passes `bound`."
+def chamfer(
+    a, b, tree_a: cKDTree | None = None, tree_b: cKDTree | None = None, bound: float = np.inf, chunk: int = 512
+) -> float:
+    """Chamfer distance: mean squared nearest distance from a to b, plus from b to a; stops early (returning a value >=
+    `bound`) once the sum passes `bound`."""
     total = 0.0
     for src, kd, n in ((a, tree_b or cKDTree(b), len(a)), (b, tree_a or cKDTree(a), len(b))):
         for c in range(0, n, chunk):
@@ -75,6 +81,7 @@ def _grid_nodes(g):
     x = np.linspace(-0.5, 0.5, g)
     return np.stack(np.meshgrid(x, x, x, indexing="ij"), -1).reshape(-1, 3)
 
+# %% ../nbs/06_metrics.ipynb #c6d9166b
 def _weights(clouds, g):
     "Sparse (m, g^3) matrix of trilinear interpolation weights of each cloud's points, averaged over the points."
     m, n, _ = clouds.shape
@@ -85,19 +92,26 @@ def _weights(clouds, g):
     for dx in (0, 1):
         for dy in (0, 1):
             for dz in (0, 1):
-                w = (f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1]) * (f[:, 2] if dz else 1 - f[:, 2])
+                w = (
+                    (f[:, 0] if dx else 1 - f[:, 0])
+                    * (f[:, 1] if dy else 1 - f[:, 1])
+                    * (f[:, 2] if dz else 1 - f[:, 2])
+                )
                 idx = ((i0[:, 0] + dx) * g + (i0[:, 1] + dy)) * g + (i0[:, 2] + dz)
                 rows.append(row); cols.append(idx); vals.append(w / n)
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, g ** 3))
 
+# %% ../nbs/06_metrics.ipynb #12c61cac
 def _fields(clouds, g, trees):
     "Dense (g^3, m) squared distance from each grid node to each cloud."
     nodes = _grid_nodes(g)
     F = np.empty((g ** 3, len(clouds)), np.float32)
     from tqdm.auto import tqdm
-    for k, t in enumerate(tqdm(trees, desc="distance fields", disable=len(trees) < 200)): F[:, k] = t.query(nodes, workers=-1)[0] ** 2
+    for k, t in enumerate(tqdm(trees, desc="distance fields", disable=len(trees) < 200)):
+        F[:, k] = t.query(nodes, workers=-1)[0] ** 2
     return F
 
+# %% ../nbs/06_metrics.ipynb #122aaaf6
 def cd_estimates(X, Y, grid: int = 33, kd=None):
     "Estimated Chamfer distances (len(X), len(Y)) between two stacks of normalised clouds."
     kx = kd[0] if kd else [cKDTree(c) for c in X]
@@ -108,7 +122,8 @@ def cd_estimates(X, Y, grid: int = 33, kd=None):
 
 # %% ../nbs/06_metrics.ipynb #c15fb3d3
 def nearest(X, Y, k: int = 10, exclude_self: bool = False, grid: int = 33, est=None, kd=None, cache=None):
-    "(exact distances, indices, certified) of each X cloud's nearest Y cloud by Chamfer distance (branch and bound on the estimates)."
+    """(exact distances, indices, certified) of each X cloud's nearest Y cloud by Chamfer distance (branch and bound on
+    the estimates)."""
     if len(Y) < 1 + exclude_self: raise TreebookError("not enough clouds to find a nearest neighbour")
     kx = kd[0] if kd else [cKDTree(c) for c in X]
     ky = kd[1] if kd else [cKDTree(c) for c in Y]
@@ -154,6 +169,7 @@ def jsd(X, Y, resolution: int = 28) -> float:
     kl = lambda a, b: float(np.sum(a[a > 0] * np.log2(a[a > 0] / b[a > 0])))
     return (kl(P, M) + kl(Q, M)) / 2
 
+# %% ../nbs/06_metrics.ipynb #6fe2e911
 class _Flipped(dict):
     "A view of a cache keyed (a, b) that answers keys (b, a): Chamfer distance is symmetric."
     def __init__(self, base): super().__init__(); self.base = base
@@ -161,14 +177,17 @@ class _Flipped(dict):
     def __getitem__(self, key): return self.base[(key[1], key[0])]
     def __setitem__(self, key, v): self.base[(key[1], key[0])] = v
 
+# %% ../nbs/06_metrics.ipynb #c51c556a
 class _Symmetric(dict):
     "A cache for distances within one set: (i, j) and (j, i) are the same pair."
     def __contains__(self, key): return super().__contains__((min(key), max(key)))
     def __getitem__(self, key): return super().__getitem__((min(key), max(key)))
     def __setitem__(self, key, v): super().__setitem__((min(key), max(key)), v)
 
+# %% ../nbs/06_metrics.ipynb #dff02855
 def evaluate(gen, ref, train=None, k: int = 10, dup_threshold: float = 2e-4, grid: int = 33) -> dict:
-    "MMD-CD, COV-CD, 1-NNA, JSD (and Unique, Novel) of generated clouds `gen` against `ref` (and `train`); `certified`: share of nearest neighbours proven exact (the least over the searches)."
+    """MMD-CD, COV-CD, 1-NNA, JSD (and Unique, Novel) of generated clouds `gen` against `ref` (and `train`);
+    `certified`: share of nearest neighbours proven exact (the least over the searches)."""
     gen, ref = np.asarray(gen, np.float64), np.asarray(ref, np.float64)
     if len(gen) < 2 or len(ref) < 2: raise TreebookError("evaluate needs at least 2 generated and 2 reference clouds")
     kg, kr = [cKDTree(c) for c in gen], [cKDTree(c) for c in ref]
@@ -177,7 +196,8 @@ def evaluate(gen, ref, train=None, k: int = 10, dup_threshold: float = 2e-4, gri
     est = lambda Wa, Fb, Wb, Fa: np.asarray(Wa @ Fb + (Wb @ Fa).T)
     e_gr, e_gg, e_rr = est(W_g, F_r, W_r, F_g), est(W_g, F_g, W_g, F_g), est(W_r, F_r, W_r, F_r)
     cross = {}  # exact gen-ref distances, shared by both directions (keys (ref, gen))
-    d_rg, i_rg, c1 = nearest(ref, gen, k, est=e_gr.T, kd=(kr, kg), cache=cross)  # each reference tree's closest generated tree
+    # each reference tree's closest generated tree
+    d_rg, i_rg, c1 = nearest(ref, gen, k, est=e_gr.T, kd=(kr, kg), cache=cross)
     flipped = _Flipped(cross)
     d_gr, i_gr, c2 = nearest(gen, ref, k, est=e_gr, kd=(kg, kr), cache=flipped)
     d_gg, _, c3 = nearest(gen, gen, k, exclude_self=True, est=e_gg, kd=(kg, kg), cache=_Symmetric({}))
@@ -196,7 +216,8 @@ def evaluate(gen, ref, train=None, k: int = 10, dup_threshold: float = 2e-4, gri
 
 # %% ../nbs/06_metrics.ipynb #d7750f91
 def connect_rate(seqs, tok) -> dict:
-    "{'Connect': mean Connect of the token sequences `seqs`, 'Connected': share of them that form one tree} (empty ones count 0)."
+    """{'Connect': mean Connect of the token sequences `seqs`, 'Connected': share of them that form one tree} (empty
+    ones count 0)."""
     if not len(seqs): raise TreebookError("connect_rate needs at least one sequence")
     c = [tok.connectivity(s) for s in seqs]
     return {"Connect": float(np.mean([x.connect for x in c])), "Connected": float(np.mean([x.connected for x in c]))}
@@ -206,7 +227,8 @@ import torch
 import torch.nn as tnn
 
 POINTNET_VERSION = 1
-POINTNET_POINTS = 512   # points per cloud seen by the classifier (the first 512 of a 2,048-point cloud: a random subset)
+# points per cloud seen by the classifier (the first 512 of a 2,048-point cloud: a random subset)
+POINTNET_POINTS = 512
 
 class SpeciesPointNet(tnn.Module):
     "A small PointNet: per-point MLP 3-64-128-256, max over points (the 256-d feature), then a classifier."
@@ -224,12 +246,21 @@ class SpeciesPointNet(tnn.Module):
     def forward(self, x): return self.head(self.features(x))
 
 # %% ../nbs/06_metrics.ipynb #96c61355
-def train_species_pointnet(clouds, labels, names, epochs: int = 30, batch_size: int = 32, lr: float = 2e-3, seed: int = 0,
-                           progress: bool = True) -> SpeciesPointNet:
+def train_species_pointnet(
+    clouds,
+    labels,
+    names,
+    epochs: int = 30,
+    batch_size: int = 32,
+    lr: float = 2e-3,
+    seed: int = 0,
+    progress: bool = True,
+) -> SpeciesPointNet:
     "A `SpeciesPointNet` fitted to normalised clouds (m, n, 3) with integer `labels` (m,) naming `names`."
     from tqdm.auto import tqdm
     clouds, labels = np.asarray(clouds, np.float32)[:, :POINTNET_POINTS], np.asarray(labels, np.int64)
-    if len(clouds) != len(labels) or len(clouds) < 2: raise TreebookError("need as many labels as clouds, and at least 2")
+    if len(clouds) != len(labels) or len(clouds) < 2:
+        raise TreebookError("need as many labels as clouds, and at least 2")
     torch.manual_seed(seed); rng = np.random.default_rng(seed)
     net = SpeciesPointNet(len(names)); opt = torch.optim.Adam(net.parameters(), lr)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, epochs)
@@ -238,33 +269,50 @@ def train_species_pointnet(clouds, labels, names, epochs: int = 30, batch_size: 
         for b in np.array_split(rng.permutation(len(clouds)), max(1, len(clouds) // batch_size)):
             a = rng.uniform(0, 2 * np.pi, len(b)); c, s = np.cos(a), np.sin(a)
             x = clouds[b].copy()
-            x[..., 0], x[..., 1] = c[:, None] * clouds[b, :, 0] - s[:, None] * clouds[b, :, 1], s[:, None] * clouds[b, :, 0] + c[:, None] * clouds[b, :, 1]
+            x[..., 0], x[..., 1] = (
+                c[:, None] * clouds[b, :, 0] - s[:, None] * clouds[b, :, 1],
+                s[:, None] * clouds[b, :, 0] + c[:, None] * clouds[b, :, 1],
+            )
             loss = tnn.functional.cross_entropy(net(torch.from_numpy(x)), torch.from_numpy(labels[b]))
             opt.zero_grad(); loss.backward(); opt.step()
         sched.step()
     net.names = list(names)
     return net.eval()
 
+# %% ../nbs/06_metrics.ipynb #e88102c3
 def save_species_pointnet(net: SpeciesPointNet, path, **meta):
     "Write the classifier (weights, species names, version, `meta`) atomically."
     from pathlib import Path
     from treebook.tree import _atomic_write
-    ck = {"format": "treebook.species_pointnet", "version": POINTNET_VERSION, "names": list(net.names), "width": net.width,
-          "state_dict": net.state_dict(), "meta": meta}
+    ck = {
+        "format": "treebook.species_pointnet",
+        "version": POINTNET_VERSION,
+        "names": list(net.names),
+        "width": net.width,
+        "state_dict": net.state_dict(),
+        "meta": meta,
+    }
     return _atomic_write(Path(path), lambda f: torch.save(ck, f))
 
+# %% ../nbs/06_metrics.ipynb #c6e2b76c
 def load_species_pointnet(path=None) -> SpeciesPointNet:
     "The shipped species classifier (or the one at `path`), with a format and version check."
     from pathlib import Path
     path = Path(path) if path else Path(__file__).parent / "data" / "weights" / "species_pointnet.pt"
-    if not path.is_file(): raise TreebookError(f"no species classifier at {path}: run scripts/train_species_pointnet.py")
-    try: ck = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e: raise TreebookError(f"cannot read {path} ({type(e).__name__}): truncated? train it again") from None
-    if not isinstance(ck, dict) or ck.get("format") != "treebook.species_pointnet": raise TreebookError(f"{path} is not a species classifier")
-    if ck.get("version") != POINTNET_VERSION: raise TreebookError(f"{path} has version {ck.get('version')}, this treebook reads {POINTNET_VERSION}")
+    if not path.is_file():
+        raise TreebookError(f"no species classifier at {path}: run scripts/train_species_pointnet.py")
+    try:
+        ck = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:
+        raise TreebookError(f"cannot read {path} ({type(e).__name__}): truncated? train it again") from None
+    if not isinstance(ck, dict) or ck.get("format") != "treebook.species_pointnet":
+        raise TreebookError(f"{path} is not a species classifier")
+    if ck.get("version") != POINTNET_VERSION:
+        raise TreebookError(f"{path} has version {ck.get('version')}, this treebook reads {POINTNET_VERSION}")
     net = SpeciesPointNet(len(ck["names"]), ck["width"]); net.load_state_dict(ck["state_dict"]); net.names = ck["names"]
     return net.eval()
 
+# %% ../nbs/06_metrics.ipynb #1b991964
 @torch.no_grad()
 def pointnet_features(clouds, net: SpeciesPointNet | None = None, batch_size: int = 64) -> np.ndarray:
     "(m, 256) float64 PointNet features of normalised clouds (m, n, 3) (the first 512 points of each)."
@@ -272,6 +320,7 @@ def pointnet_features(clouds, net: SpeciesPointNet | None = None, batch_size: in
     x = torch.from_numpy(np.asarray(clouds, np.float32)[:, :POINTNET_POINTS])
     return np.concatenate([net.features(x[i:i + batch_size]).double().numpy() for i in range(0, len(x), batch_size)])
 
+# %% ../nbs/06_metrics.ipynb #b45cf6c7
 def frechet_distance(f1, f2) -> float:
     "Frechet distance between Gaussians fitted to feature sets f1 (m1, d) and f2 (m2, d)."
     from scipy import linalg
@@ -284,6 +333,7 @@ def frechet_distance(f1, f2) -> float:
         eps = np.eye(len(s1)) * 1e-6; covmean = linalg.sqrtm((s1 + eps) @ (s2 + eps))
     return float(((m1 - m2) ** 2).sum() + np.trace(s1 + s2 - 2 * np.real(covmean)))
 
+# %% ../nbs/06_metrics.ipynb #f2ebc18d
 def fpd(gen, ref, net: SpeciesPointNet | None = None) -> float:
     "FPD (our stand-in for FID): Frechet distance of the species-PointNet features of clouds `gen` and `ref`."
     net = net or load_species_pointnet()

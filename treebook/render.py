@@ -31,7 +31,8 @@ def _colors_for(values, m, cmap="tab20"):
     if values.shape == (m, 3) or values.shape == (m, 4):
         v = values[:, :3]
         return (v * 255 if v.dtype.kind == "f" and v.max() <= 1 else v).astype(np.uint8)
-    if values.shape != (m,): raise TreebookError(f"colors must be (m, 3) RGB or one value per point ({m}); got shape {values.shape}")
+    if values.shape != (m,):
+        raise TreebookError(f"colors must be (m, 3) RGB or one value per point ({m}); got shape {values.shape}")
     import matplotlib
     if values.dtype.kind in "iub":
         k = values.astype(np.int64)
@@ -41,6 +42,7 @@ def _colors_for(values, m, cmap="tab20"):
         rgb = matplotlib.colormaps["viridis" if cmap == "tab20" else cmap]((values - lo) / (hi - lo if hi > lo else 1))
     return (rgb[:, :3] * 255).astype(np.uint8)
 
+# %% ../nbs/01a_render.ipynb #81727e03
 def _scene(obj, colors=None, leaves=False, sides=8):
     "A list of ('mesh', Trimesh) and ('points', xyz, rgb) items from a Tree, mesh, point array or a list of them."
     from treebook.mesh import tree_mesh
@@ -54,11 +56,15 @@ def _scene(obj, colors=None, leaves=False, sides=8):
         elif isinstance(it, trimesh.PointCloud): out.append(("points", np.asarray(it.vertices, float), _colors_for(colors, len(it.vertices))))
         else:
             p = np.asarray(it, dtype=np.float64) if not isinstance(it, str) else np.zeros(0)
-            if p.ndim != 2 or p.shape[1] != 3 or not len(p): raise TreebookError(f"render needs a Tree, a mesh or an (m, 3) point array, got {type(it).__name__} {getattr(p, 'shape', '')}")
+            if p.ndim != 2 or p.shape[1] != 3 or not len(p):
+                raise TreebookError(
+                    f"render needs a Tree, a mesh or an (m, 3) point array, got {type(it).__name__} {getattr(p, 'shape', '')}"
+                )
             if not np.isfinite(p).all(): raise TreebookError("the points to render hold NaN or infinity")
             out.append(("points", p, _colors_for(colors, len(p))))
     return out
 
+# %% ../nbs/01a_render.ipynb #c97bfaae
 def _bounds(scene):
     pts = np.concatenate([it[1].vertices if it[0] == "mesh" else it[1] for it in scene])
     return pts.min(0), pts.max(0)
@@ -78,7 +84,9 @@ def _render_pyvista(scene, view, size, background, point_size):
                 if rgb is not None: pl.add_mesh(poly, scalars=rgb, rgb=True, smooth_shading=False)
                 else: pl.add_mesh(poly, color=(150, 120, 90))
             else:
-                pl.add_points(pv.PolyData(it[1]), scalars=it[2], rgb=True, point_size=point_size, render_points_as_spheres=False)
+                pl.add_points(
+                    pv.PolyData(it[1]), scalars=it[2], rgb=True, point_size=point_size, render_points_as_spheres=False
+                )
         lo, hi = _bounds(scene)
         c, r = (lo + hi) / 2, max(np.linalg.norm(hi - lo), 1e-9)
         d, up = VIEWS[view]
@@ -90,6 +98,7 @@ def _render_pyvista(scene, view, size, background, point_size):
         pl.close()
     return Image.fromarray(np.asarray(img)[:, :, :3])
 
+# %% ../nbs/01a_render.ipynb #31130004
 def _project(p, view):
     "2D image-plane coordinates and depth (larger = nearer the viewer) of points `p` for `view`."
     d, up = (np.asarray(v, float) for v in VIEWS[view])
@@ -98,6 +107,7 @@ def _project(p, view):
     upv = np.cross(d, right)
     return np.stack([p @ right, p @ upv], -1), p @ d
 
+# %% ../nbs/01a_render.ipynb #ec1af539
 def _render_matplotlib(scene, view, size, background, point_size, tree=None):
     import matplotlib
     matplotlib.use("Agg", force=False)
@@ -116,7 +126,9 @@ def _render_matplotlib(scene, view, size, background, point_size, tree=None):
             xy, z = _project(seg.reshape(-1, 3), view)
             o = np.argsort(z.reshape(-1, 2).mean(1))
             lw = 1 + 400 * tree.start[:, 3] / max(tree.size, 1e-9)
-            ax.add_collection(LineCollection(xy.reshape(-1, 2, 2)[o], linewidths=lw[o], colors="#694e34", capstyle="round"))
+            ax.add_collection(
+                LineCollection(xy.reshape(-1, 2, 2)[o], linewidths=lw[o], colors="#694e34", capstyle="round")
+            )
         else:  # a mesh: triangles sorted far to near, shaded by how much they face the light
             m = it[1]
             xy, z = _project(np.asarray(m.vertices, float), view)
@@ -124,8 +136,14 @@ def _render_matplotlib(scene, view, size, background, point_size, tree=None):
             o = np.argsort(z[tri].mean(1))
             light = np.asarray(VIEWS[view][0], float); light = light / np.linalg.norm(light)
             shade = 0.35 + 0.65 * np.abs(m.face_normals @ light)
-            rgb = np.asarray(m.visual.face_colors)[:, :3] / 255 if m.visual.kind == "face" else np.full((len(tri), 3), .55)
-            ax.add_collection(PolyCollection(xy[tri][o], facecolors=np.clip(rgb[o] * shade[o, None], 0, 1), edgecolors="none"))
+            rgb = (
+                np.asarray(m.visual.face_colors)[:, :3] / 255
+                if m.visual.kind == "face"
+                else np.full((len(tri), 3), 0.55)
+            )
+            ax.add_collection(
+                PolyCollection(xy[tri][o], facecolors=np.clip(rgb[o] * shade[o, None], 0, 1), edgecolors="none")
+            )
     lo, hi = _bounds(scene)
     corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
     xy, _ = _project(corners, view)
@@ -142,9 +160,11 @@ def render(obj, view: str = "iso", size=(512, 512), backend: str = "auto", color
            background="white", point_size: float = 3.0) -> Image.Image:
     "A picture of a Tree, a trimesh mesh, an (m, 3) point array (coloured by `colors`), or a list of them."
     if view not in VIEWS: raise TreebookError(f"unknown view {view!r}: use one of {', '.join(VIEWS)}")
-    if backend not in ("auto", "pyvista", "matplotlib"): raise TreebookError(f"unknown backend {backend!r}: use auto, pyvista or matplotlib")
+    if backend not in ("auto", "pyvista", "matplotlib"):
+        raise TreebookError(f"unknown backend {backend!r}: use auto, pyvista or matplotlib")
     size = (int(size[0]), int(size[1]))
-    if min(size) < 16 or max(size) > 8192: raise TreebookError(f"image size must be between 16 and 8192 pixels a side, got {size}")
+    if min(size) < 16 or max(size) > 8192:
+        raise TreebookError(f"image size must be between 16 and 8192 pixels a side, got {size}")
     scene = _scene(obj, colors, leaves)
     if backend != "matplotlib":
         try:
@@ -157,6 +177,7 @@ def render(obj, view: str = "iso", size=(512, 512), backend: str = "auto", color
     tree = obj if isinstance(obj, Tree) and not leaves else None
     return _render_matplotlib(scene, view, size, background, point_size, tree=tree)
 
+# %% ../nbs/01a_render.ipynb #5406cf05
 def image_grid(images, ncols: int | None = None, labels=None, pad: int = 4, background="white") -> Image.Image:
     "Tile PIL images in a grid (`ncols` columns), with an optional label under each."
     images = list(images)

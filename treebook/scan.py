@@ -21,7 +21,8 @@ __all__ = ['WINDOW', 'Scan', 'scan', 'silhouette', 'sketch']
 # %% ../nbs/02a_scan.ipynb #0526e7f0
 @dataclass
 class Scan:
-    "A labelled point cloud: points (m, 3), branch id (-1: outlier), junction, foliage and outlier flags, scanner positions."
+    """A labelled point cloud: points (m, 3), branch id (-1: outlier), junction, foliage and outlier flags, scanner
+    positions."""
     points: np.ndarray
     branch: np.ndarray
     junction: np.ndarray
@@ -32,6 +33,7 @@ class Scan:
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in ("points", "branch", "junction", "foliage", "outlier", "viewpoints")}
 
+# %% ../nbs/02a_scan.ipynb #b2727582
 def _viewpoints(tree: Tree, views: int, rng) -> np.ndarray:
     "`views` scanner positions on a circle around the tree, 2.5 sizes from its centre, a little above mid-height."
     lo, hi = tree.bounds(with_radius=True)
@@ -41,11 +43,14 @@ def _viewpoints(tree: Tree, views: int, rng) -> np.ndarray:
     d = 2.5 * max(tree.size, 1e-9)
     return c + d * np.column_stack([np.cos(az) * np.cos(el), np.sin(az) * np.cos(el), np.sin(el)])
 
+# %% ../nbs/02a_scan.ipynb #945934df
 def _cast(mesh: trimesh.Trimesh, origins, targets):
     "First hits of the rays from `origins` toward `targets`: (hit mask, points, face ids). Open3D's RaycastingScene."
     import open3d as o3d
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)), o3d.core.Tensor(np.asarray(mesh.faces, np.uint32)))
+    scene.add_triangles(
+        o3d.core.Tensor(np.asarray(mesh.vertices, np.float32)), o3d.core.Tensor(np.asarray(mesh.faces, np.uint32))
+    )
     d = targets - origins
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     ans = scene.cast_rays(o3d.core.Tensor(np.hstack([origins, d]).astype(np.float32)))
@@ -60,18 +65,35 @@ def _forks(tree: Tree):
     f = np.flatnonzero(kids >= 2)
     return tree.end[f, :3].astype(np.float64), np.maximum(3 * tree.end[f, 3], 0.01 * tree.size)
 
-def scan(tree: Tree, n_points: int = 16384, views: int = 3, noise: float = 0.002, outliers: float = 0.01, missing: int = 0,
-         missing_radius: float = 0.08, leaves: bool = False, sides: int = 8, seed: int = 0, mesh=None) -> Scan:
-    "Scan `tree` by ray casting its mesh from `views` positions: `n_points` labelled points with noise, outliers and missing regions."
+# %% ../nbs/02a_scan.ipynb #8a0ab534
+def scan(
+    tree: Tree,
+    n_points: int = 16384,
+    views: int = 3,
+    noise: float = 0.002,
+    outliers: float = 0.01,
+    missing: int = 0,
+    missing_radius: float = 0.08,
+    leaves: bool = False,
+    sides: int = 8,
+    seed: int = 0,
+    mesh=None,
+) -> Scan:
+    """Scan `tree` by ray casting its mesh from `views` positions: `n_points` labelled points with noise, outliers and
+    missing regions."""
     if not isinstance(tree, Tree) or not tree.n: raise TreebookError("scan needs a non-empty Tree")
-    if not isinstance(n_points, (int, np.integer)) or not 1 <= n_points <= 10_000_000: raise TreebookError(f"n_points must be a whole number in 1..10,000,000, got {n_points!r}")
-    if not isinstance(views, (int, np.integer)) or not 1 <= views <= 64: raise TreebookError(f"views must be a whole number in 1..64, got {views!r}")
+    if not isinstance(n_points, (int, np.integer)) or not 1 <= n_points <= 10_000_000:
+        raise TreebookError(f"n_points must be a whole number in 1..10,000,000, got {n_points!r}")
+    if not isinstance(views, (int, np.integer)) or not 1 <= views <= 64:
+        raise TreebookError(f"views must be a whole number in 1..64, got {views!r}")
     for name, v, hi in (("noise", noise, 0.5), ("outliers", outliers, 0.9), ("missing_radius", missing_radius, 1.0)):
         if not np.isfinite(v) or not 0 <= v <= hi: raise TreebookError(f"{name} must be between 0 and {hi}, got {v!r}")
-    if not isinstance(missing, (int, np.integer)) or not 0 <= missing <= 100: raise TreebookError(f"missing must be a whole number of regions in 0..100, got {missing!r}")
+    if not isinstance(missing, (int, np.integer)) or not 0 <= missing <= 100:
+        raise TreebookError(f"missing must be a whole number of regions in 0..100, got {missing!r}")
     rng = np.random.default_rng(seed)
     mesh = mesh if mesh is not None else tree_mesh(tree, sides=sides, leaves=leaves, seed=seed)
-    fb = np.asarray(mesh.metadata["face_branch"]); fl = np.asarray(mesh.metadata.get("face_leaf", np.zeros(len(fb), bool)))
+    fb = np.asarray(mesh.metadata["face_branch"])
+    fl = np.asarray(mesh.metadata.get("face_leaf", np.zeros(len(fb), bool)))
     size = max(tree.size, 1e-12)
     vps = _viewpoints(tree, views, rng)
     n_out = int(round(outliers * n_points)); n_in = n_points - n_out
@@ -88,7 +110,8 @@ def scan(tree: Tree, n_points: int = 16384, views: int = 3, noise: float = 0.002
             p, f = p[keep], f[keep]
         pts, face = np.concatenate([pts, p]), np.concatenate([face, f])
         if len(pts) >= n_in: break
-    if not len(pts): raise TreebookError("the scanner saw nothing of this tree (is it degenerate, or all removed as missing?)")
+    if not len(pts):
+        raise TreebookError("the scanner saw nothing of this tree (is it degenerate, or all removed as missing?)")
     pick = rng.choice(len(pts), n_in, replace=len(pts) < n_in)
     pts, face = pts[pick], face[pick]
     pts = pts + rng.normal(0, noise * size, pts.shape)
@@ -104,7 +127,14 @@ def scan(tree: Tree, n_points: int = 16384, views: int = 3, noise: float = 0.002
         d, j = cKDTree(fp).query(points)
         junction = (d <= fr[j]) & ~outlier
     order = rng.permutation(n_points)
-    return Scan(points[order].astype(np.float32), branch[order], junction[order], foliage[order], outlier[order], vps.astype(np.float32))
+    return Scan(
+        points[order].astype(np.float32),
+        branch[order],
+        junction[order],
+        foliage[order],
+        outlier[order],
+        vps.astype(np.float32),
+    )
 
 # %% ../nbs/02a_scan.ipynb #1d656920
 WINDOW = (-0.8, 0.8, -0.3, 1.3)  # x min, x max, z min, z max of the fixed front camera, canonical units
@@ -113,9 +143,11 @@ def _to_px(xz, size):
     x0, x1, z0, z1 = WINDOW
     return np.column_stack([(xz[:, 0] - x0) / (x1 - x0) * size, (z1 - xz[:, 1]) / (z1 - z0) * size])
 
+# %% ../nbs/02a_scan.ipynb #3e71c161
 def silhouette(tree: Tree, size: int = 224) -> np.ndarray:
     "A (size, size) uint8 silhouette (255 = tree) of a canonical tree seen from the front by the fixed camera."
-    if not isinstance(size, (int, np.integer)) or not 16 <= size <= 4096: raise TreebookError(f"image size must be in 16..4096, got {size!r}")
+    if not isinstance(size, (int, np.integer)) or not 16 <= size <= 4096:
+        raise TreebookError(f"image size must be in 16..4096, got {size!r}")
     img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
     s, e = _to_px(tree.start[:, [0, 2]], size), _to_px(tree.end[:, [0, 2]], size)
     px = size / (WINDOW[1] - WINDOW[0])
@@ -127,9 +159,12 @@ def silhouette(tree: Tree, size: int = 224) -> np.ndarray:
         draw.ellipse([c[0] - r, c[1] - r, c[0] + r, c[1] + r], fill=255)
     return np.asarray(img)
 
+# %% ../nbs/02a_scan.ipynb #3033a363
 def sketch(tree: Tree, size: int = 224):
-    "(lines (n, 4) float32: x0 y0 x1 y1 in pixels, raster (size, size) uint8): the branch axes as seen by the fixed camera."
-    if not isinstance(size, (int, np.integer)) or not 16 <= size <= 4096: raise TreebookError(f"image size must be in 16..4096, got {size!r}")
+    """(lines (n, 4) float32: x0 y0 x1 y1 in pixels, raster (size, size) uint8): the branch axes as seen by the fixed
+    camera."""
+    if not isinstance(size, (int, np.integer)) or not 16 <= size <= 4096:
+        raise TreebookError(f"image size must be in 16..4096, got {size!r}")
     lines = np.hstack([_to_px(tree.start[:, [0, 2]], size), _to_px(tree.end[:, [0, 2]], size)]).astype(np.float32)
     img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
     for l in lines: draw.line([tuple(l[:2]), tuple(l[2:])], fill=255, width=1)

@@ -36,8 +36,11 @@ def seq_length(branches: int) -> int:
     return BLOCK * (int(branches) + 2)
 
 # %% ../nbs/03_tokens.ipynb #faaf5737
-def bin_edges(values, rule: str = "uniform", mix: float = 0.1, margin: float = 0.0, n_bins: int = N_VALUES) -> np.ndarray:
-    "`n_bins + 1` strictly increasing edges for `values` by `rule` ('quantile', 'uniform' or 'log'), range widened by `margin`."
+def bin_edges(
+    values, rule: str = "uniform", mix: float = 0.1, margin: float = 0.0, n_bins: int = N_VALUES
+) -> np.ndarray:
+    """`n_bins + 1` strictly increasing edges for `values` by `rule` ('quantile', 'uniform' or 'log'), range widened by
+    `margin`."""
     if rule not in RULES: raise TreebookError(f"unknown bin rule {rule!r}: use one of {', '.join(RULES)}")
     if not 0 < mix <= 1: raise TreebookError(f"`mix` must be in (0, 1], got {mix}")
     if not 0 <= margin <= 1: raise TreebookError(f"`margin` must be in [0, 1], got {margin}")
@@ -56,7 +59,8 @@ def bin_edges(values, rule: str = "uniform", mix: float = 0.1, margin: float = 0
         if lo < 0: raise TreebookError("the 'log' bin rule needs values >= 0 (it is meant for radii)")
         e = np.geomspace(max(lo, hi * 1e-4), hi, n_bins + 1)
         e[0] = lo
-        return np.maximum.accumulate(e + np.arange(n_bins + 1) * 1e-12 * hi)  # strictly increasing even if lo == hi*1e-4
+        # strictly increasing even if lo == hi*1e-4
+        return np.maximum.accumulate(e + np.arange(n_bins + 1) * 1e-12 * hi)
     q = np.quantile(v, np.linspace(0, 1, n_bins + 1))
     q[0], q[-1] = lo, hi
     return (1 - mix) * q + mix * u
@@ -67,7 +71,8 @@ def hilbert_index(points, bits: int = 9) -> np.ndarray:
     p = np.asarray(points)
     if p.ndim != 2 or p.shape[1] != 3: raise TreebookError(f"hilbert_index needs points of shape (m, 3); got {p.shape}")
     if not 1 <= bits <= 20: raise TreebookError(f"bits must be in 1..20, got {bits}")
-    if len(p) and (p.min() < 0 or p.max() >= 1 << bits): raise TreebookError(f"points must be integers in [0, {1 << bits})")
+    if len(p) and (p.min() < 0 or p.max() >= 1 << bits):
+        raise TreebookError(f"points must be integers in [0, {1 << bits})")
     X = [c.astype(np.uint64) for c in p.T]
     q = 1 << (bits - 1)
     while q > 1:                                   # inverse undo: from the top bit down
@@ -110,8 +115,10 @@ def _walk(parent: np.ndarray, rank: np.ndarray, kind: str) -> np.ndarray:
             level = [c for i in level for c in kids[cut[i]:cut[i + 1]]]
     return np.array(out, np.int64)
 
+# %% ../nbs/03_tokens.ipynb #22618eb5
 def _order(q: np.ndarray, tree: Tree, kind: str, h=None) -> np.ndarray:
-    "Branch indices of `tree` in `kind` order, from its quantised branches `q` (n, 8) (and their Hilbert indices `h`, if known)."
+    """Branch indices of `tree` in `kind` order, from its quantised branches `q` (n, 8) (and their Hilbert indices `h`,
+    if known)."""
     n = len(q); idx = np.arange(n)
     if kind in ("dfs", "bfs"):
         rank = np.empty(n, np.int64)
@@ -128,21 +135,27 @@ def _as_tokens(tokens, strict: bool) -> np.ndarray:
     if hasattr(tokens, "detach"): tokens = tokens.detach().cpu().numpy()  # a torch tensor
     try: a = np.asarray(tokens)
     except (TypeError, ValueError) as e: raise TreebookError(f"tokens must be a sequence of integers: {e}") from None
-    if a.ndim != 1: raise TreebookError(f"tokens must be one sequence (1-D); got shape {a.shape}: use decode_batch for a batch")
+    if a.ndim != 1:
+        raise TreebookError(f"tokens must be one sequence (1-D); got shape {a.shape}: use decode_batch for a batch")
     if a.dtype.kind == "b": a = a.astype(np.int64)
     if a.dtype.kind not in "iuf" and len(a): raise TreebookError(f"tokens must be integers, got dtype {a.dtype}")
     if a.dtype.kind == "f":
         with np.errstate(invalid="ignore"):
             good = np.isfinite(a) & (a == np.round(a)) & (a >= 0) & (a < VOCAB_SIZE)
         a = np.where(good, np.nan_to_num(a), -1)
-    if a.dtype.kind == "u": a = np.where(a < VOCAB_SIZE, a, VOCAB_SIZE).astype(np.int64)  # big unsigned values: no overflow
+    # big unsigned values: no overflow
+    if a.dtype.kind == "u": a = np.where(a < VOCAB_SIZE, a, VOCAB_SIZE).astype(np.int64)
     a = a.astype(np.int64)
     a = np.where((a >= 0) & (a < VOCAB_SIZE), a, -1)
     if strict:
         bad = np.flatnonzero(a < 0)
-        if len(bad): raise TreebookError(f"token at position {bad[0]} is not in the vocabulary 0..{VOCAB_SIZE - 1} (or not an integer)")
+        if len(bad):
+            raise TreebookError(
+                f"token at position {bad[0]} is not in the vocabulary 0..{VOCAB_SIZE - 1} (or not an integer)"
+            )
     return a
 
+# %% ../nbs/03_tokens.ipynb #84496716
 def _parse(a: np.ndarray, strict: bool):
     "Branches (n, 8) and their stage numbers (n,) from a token array; `has_stage` if any [STAGE] block was seen."
     n = len(a)
@@ -150,15 +163,25 @@ def _parse(a: np.ndarray, strict: bool):
         i = 0
         while i < n and COND <= a[i] < COND + N_COND: i += 1
         if n - i < BLOCK or np.any(a[i:i + BLOCK] != SOS):
-            raise TreebookError(f"expected 8 [SOS] tokens ({SOS}) at position {i}: a sequence starts with them (after condition tokens)")
+            raise TreebookError(
+                f"expected 8 [SOS] tokens ({SOS}) at position {i}: a sequence starts with them (after condition tokens)"
+            )
         b = i + BLOCK
         ends = np.flatnonzero(a[b:] == EOS)
-        if not len(ends): raise TreebookError("no [EOS] token: the sequence is truncated (it must end with 8 [EOS], then only [PAD])")
+        if not len(ends):
+            raise TreebookError("no [EOS] token: the sequence is truncated (it must end with 8 [EOS], then only [PAD])")
         e = b + int(ends[0])
-        if (e - b) % BLOCK: raise TreebookError(f"the branch that starts at position {b + (e - b) // BLOCK * BLOCK} is cut short by [EOS] at position {e}")
-        if n - e < BLOCK or np.any(a[e:e + BLOCK] != EOS): raise TreebookError(f"expected 8 [EOS] tokens from position {e}")
+        if (e - b) % BLOCK:
+            raise TreebookError(
+                f"the branch that starts at position {b + (e - b) // BLOCK * BLOCK} is cut short by [EOS] at position {e}"
+            )
+        if n - e < BLOCK or np.any(a[e : e + BLOCK] != EOS):
+            raise TreebookError(f"expected 8 [EOS] tokens from position {e}")
         tail = np.flatnonzero(a[e + BLOCK:] != PAD)
-        if len(tail): raise TreebookError(f"token {a[e + BLOCK + tail[0]]} at position {e + BLOCK + tail[0]} after [EOS]: only [PAD] may follow")
+        if len(tail):
+            raise TreebookError(
+                f"token {a[e + BLOCK + tail[0]]} at position {e + BLOCK + tail[0]} after [EOS]: only [PAD] may follow"
+            )
         rows = a[b:e].reshape(-1, BLOCK)
     else:
         lead = (a == SOS) | (a < 0) | (a >= COND)
@@ -170,9 +193,12 @@ def _parse(a: np.ndarray, strict: bool):
     value = (rows < N_VALUES).all(1) & (rows >= 0).all(1)
     stage = (rows == STAGE).all(1)
     if strict and not (value | stage).all():
-        k = int(np.argmin(value | stage)); j = int(np.argmax((rows[k] >= N_VALUES) | (rows[k] < 0))) if stage[k] == 0 and (rows[k] < N_VALUES).any() else 0
-        raise TreebookError(f"the block at positions {b + k * BLOCK}..{b + k * BLOCK + 7} mixes value and special tokens "
-                            f"(token {rows[k, j]} at position {b + k * BLOCK + j}): a branch is 8 value tokens")
+        k = int(np.argmin(value | stage))
+        j = int(np.argmax((rows[k] >= N_VALUES) | (rows[k] < 0))) if stage[k] == 0 and (rows[k] < N_VALUES).any() else 0
+        raise TreebookError(
+            f"the block at positions {b + k * BLOCK}..{b + k * BLOCK + 7} mixes value and special tokens "
+            f"(token {rows[k, j]} at position {b + k * BLOCK + j}): a branch is 8 value tokens"
+        )
     stage_no = np.cumsum(stage)[value]
     return rows[value], stage_no, bool(stage.any())
 
@@ -194,6 +220,7 @@ def _link(V: np.ndarray, root_key: int):
             nxt[ek[i]] = i
     return np.array(parent, np.int64), np.array(sk) == root_key
 
+# %% ../nbs/03_tokens.ipynb #c6329566
 def _topo(parent: np.ndarray, anchored: np.ndarray):
     "A parents-first order of the branches, and the parents with cycles cut; the number of cuts."
     n = len(parent)
@@ -221,11 +248,13 @@ def _topo(parent: np.ndarray, anchored: np.ndarray):
 # %% ../nbs/03_tokens.ipynb #a4fc474b
 @dataclass(frozen=True)
 class Connectivity:
-    "Connect (fraction of anchored branches), whether all branches hang together from the root cell, and the branch count."
+    """Connect (fraction of anchored branches), whether all branches hang together from the root cell, and the branch
+    count."""
     connect: float
     connected: bool
     branches: int
 
+# %% ../nbs/03_tokens.ipynb #3880ed97
 def _connectivity(V: np.ndarray, root_key: int) -> Connectivity:
     n = len(V)
     if not n: return Connectivity(0.0, False, 0)
@@ -246,7 +275,8 @@ def _connectivity(V: np.ndarray, root_key: int) -> Connectivity:
 
 # %% ../nbs/03_tokens.ipynb #424d6e9d
 def _canonical(tree: Tree, normalize: bool = True) -> np.ndarray:
-    "The branches of `tree` as (n, 8) float64 in the canonical frame, children's starts snapped onto their parents' ends."
+    """The branches of `tree` as (n, 8) float64 in the canonical frame, children's starts snapped onto their parents'
+    ends."""
     if not isinstance(tree, Tree): raise TreebookError(f"expected a Tree, got {type(tree).__name__}")
     if not tree.n: return np.zeros((0, 8))
     if normalize: tree = tree.normalize()[0]
@@ -255,6 +285,7 @@ def _canonical(tree: Tree, normalize: bool = True) -> np.ndarray:
     s[child, :3] = e[tree.parent[child], :3]
     return np.concatenate([s, e], 1)
 
+# %% ../nbs/03_tokens.ipynb #b1d80e05
 class Tokenizer:
     "Quantises trees to token sequences and back: 256 bins per x, y, z (start and end share them) and radius."
     sos, eos, pad, stage, cond = SOS, EOS, PAD, STAGE, COND
@@ -263,33 +294,48 @@ class Tokenizer:
     def __init__(self, edges, rule: str = "uniform", radius_rule: str | None = None, meta: dict | None = None):
         try: edges = np.array(edges, dtype=np.float64)
         except (TypeError, ValueError) as e: raise TreebookError(f"bin edges must be numbers: {e}") from None
-        if edges.shape != (4, N_VALUES + 1): raise TreebookError(f"bin edges must have shape (4, {N_VALUES + 1}) for x, y, z, radius; got {edges.shape}")
+        if edges.shape != (4, N_VALUES + 1):
+            raise TreebookError(f"bin edges must have shape (4, {N_VALUES + 1}) for x, y, z, radius; got {edges.shape}")
         if not np.isfinite(edges).all(): raise TreebookError("bin edges hold NaN or infinity")
-        if not (np.diff(edges, axis=1) > 0).all(): raise TreebookError("bin edges must be strictly increasing along each axis")
+        if not (np.diff(edges, axis=1) > 0).all():
+            raise TreebookError("bin edges must be strictly increasing along each axis")
         if edges[3, 0] < 0: raise TreebookError("radius bin edges must be >= 0")
         self.edges, self.rule, self.radius_rule = edges, rule, radius_rule or rule
         self.meta = dict(meta or {})
         self.centres = (edges[:, :-1] + edges[:, 1:]) / 2
         self._inner = edges[:, 1:-1]
-        self.root_tokens = np.array([int(np.searchsorted(self._inner[a], 0.0, side="right")) for a in range(3)], np.int64)
+        self.root_tokens = np.array(
+            [int(np.searchsorted(self._inner[a], 0.0, side="right")) for a in range(3)], np.int64
+        )
         self.root_key = int(self.root_tokens[0] * 65536 + self.root_tokens[1] * 256 + self.root_tokens[2])
         self.min_radius_token = int(np.argmax(self.centres[3] > 0)) if (self.centres[3] > 0).any() else N_VALUES - 1
 
-    def __repr__(self): return f"Tokenizer(rule={self.rule!r}, radius_rule={self.radius_rule!r}, vocab_size={self.vocab_size})"
+    def __repr__(self):
+        return f"Tokenizer(rule={self.rule!r}, radius_rule={self.radius_rule!r}, vocab_size={self.vocab_size})"
 
     @property
-    def bin_widths(self) -> np.ndarray: "(4, 256) widths of the bins of x, y, z, radius."; return np.diff(self.edges, axis=1)
+    def bin_widths(self) -> np.ndarray:
+        "(4, 256) widths of the bins of x, y, z, radius."
+        return np.diff(self.edges, axis=1)
 
     @classmethod
-    def fit(cls, trees, rule: str = "uniform", radius_rule: str | None = "log", mix: float = 0.1, margin: float = 0.02) -> "Tokenizer":
-        "Fit bin edges to `trees` (a Tree or an iterable of them) in their canonical frames; radii by `radius_rule` (None: `rule`)."
+    def fit(
+        cls, trees, rule: str = "uniform", radius_rule: str | None = "log", mix: float = 0.1, margin: float = 0.02
+    ) -> "Tokenizer":
+        """Fit bin edges to `trees` (a Tree or an iterable of them) in their canonical frames; radii by `radius_rule`
+        (None: `rule`)."""
         trees = [trees] if isinstance(trees, Tree) else list(trees)
         X = [_canonical(t) for t in trees]
         X = np.concatenate(X) if X else np.zeros((0, 8))
         if not len(X): raise TreebookError("cannot fit a tokenizer to no branches: give at least one non-empty tree")
         radius_rule = radius_rule or rule
-        if rule == "log": raise TreebookError("the 'log' rule is for radii only: use rule='quantile' or 'uniform' with radius_rule='log'")
-        edges = [bin_edges(X[:, [a, a + 4]], rule, mix, margin) for a in range(3)] + [bin_edges(X[:, [3, 7]], radius_rule, mix, margin)]
+        if rule == "log":
+            raise TreebookError(
+                "the 'log' rule is for radii only: use rule='quantile' or 'uniform' with radius_rule='log'"
+            )
+        edges = [bin_edges(X[:, [a, a + 4]], rule, mix, margin) for a in range(3)] + [
+            bin_edges(X[:, [3, 7]], radius_rule, mix, margin)
+        ]
         return cls(edges, rule, radius_rule, {"trees": len(trees), "branches": len(X), "mix": mix, "margin": margin})
 
 # %% ../nbs/03_tokens.ipynb #5b9f9b5c
@@ -302,12 +348,15 @@ def quantise(self: Tokenizer, tree: Tree, normalize: bool = True) -> np.ndarray:
         q[:, cols] = np.searchsorted(self._inner[a], X[:, cols], side="right")
     return q
 
+# %% ../nbs/03_tokens.ipynb #d9ef3e43
 def dequantise(self: Tokenizer, q) -> np.ndarray:
     "(n, 8) float64 bin centres of value tokens `q` (n, 8)."
     q = np.asarray(q, np.int64).reshape(-1, BLOCK)
-    if len(q) and (q.min() < 0 or q.max() >= N_VALUES): raise TreebookError(f"value tokens must be in 0..{N_VALUES - 1}")
+    if len(q) and (q.min() < 0 or q.max() >= N_VALUES):
+        raise TreebookError(f"value tokens must be in 0..{N_VALUES - 1}")
     return self.centres[_AXIS, q]
 
+# %% ../nbs/03_tokens.ipynb #510d855e
 def order(self: Tokenizer, tree: Tree, kind: str = "dfs", normalize: bool = True) -> np.ndarray:
     "Indices of the branches of `tree` in the sequence order `kind` ('dfs', 'bfs', 'zyx' or 'hilbert')."
     if kind not in ORDERS: raise TreebookError(f"unknown branch order {kind!r}: use one of {', '.join(ORDERS)}")
@@ -327,12 +376,18 @@ def _sequence(q, tree, order, length, h=None):
     out[:BLOCK] = SOS; out[BLOCK:BLOCK + len(body)] = body; out[BLOCK + len(body):need] = EOS
     return out
 
-def encode(self: Tokenizer, tree: Tree, order: str = "dfs", length: int | None = None, normalize: bool = True) -> np.ndarray:
+# %% ../nbs/03_tokens.ipynb #2ff22dfe
+def encode(
+    self: Tokenizer, tree: Tree, order: str = "dfs", length: int | None = None, normalize: bool = True
+) -> np.ndarray:
     "The token sequence (int64) of `tree`: 8 [SOS], 8 tokens per branch in `order`, 8 [EOS], [PAD] up to `length`."
     if order not in ORDERS: raise TreebookError(f"unknown branch order {order!r}: use one of {', '.join(ORDERS)}")
     return _sequence(self.quantise(tree, normalize), tree, order, length)
 
-def encode_batch(self: Tokenizer, trees, order: str = "dfs", length: int | None = None, normalize: bool = True) -> np.ndarray:
+# %% ../nbs/03_tokens.ipynb #c5d51c68
+def encode_batch(
+    self: Tokenizer, trees, order: str = "dfs", length: int | None = None, normalize: bool = True
+) -> np.ndarray:
     "(batch, length) int64 sequences of `trees`, padded to `length` or to the longest."
     if order not in ORDERS: raise TreebookError(f"unknown branch order {order!r}: use one of {', '.join(ORDERS)}")
     trees = list(trees)
@@ -345,7 +400,10 @@ def encode_batch(self: Tokenizer, trees, order: str = "dfs", length: int | None 
     if length is None: length = max((len(s) for s in seqs), default=2 * BLOCK)
     out = np.full((len(seqs), int(length)), PAD, np.int64)
     for i, s in enumerate(seqs):
-        if len(s) > length: raise TreebookError(f"tree {i} needs {len(s)} tokens, more than length={length}: raise length or cut the tree with tree.prefix")
+        if len(s) > length:
+            raise TreebookError(
+                f"tree {i} needs {len(s)} tokens, more than length={length}: raise length or cut the tree with tree.prefix"
+            )
         out[i, :len(s)] = s
     return out
 
@@ -354,7 +412,8 @@ Tokenizer.encode, Tokenizer.encode_batch = encode, encode_batch
 # %% ../nbs/03_tokens.ipynb #ece56697
 def decode(self: Tokenizer, tokens, strict: bool = False, unattached: str = "root") -> Tree:
     "A `Tree` (canonical frame) from any token sequence; `strict` raises `TreebookError` where non-strict repairs."
-    if unattached not in ("root", "drop"): raise TreebookError(f"unattached must be 'root' or 'drop', got {unattached!r}")
+    if unattached not in ("root", "drop"):
+        raise TreebookError(f"unattached must be 'root' or 'drop', got {unattached!r}")
     V, stage, has_stage = _parse(_as_tokens(tokens, strict), strict)
     if not len(V): return Tree.empty()
     parent, anchored = _link(V, self.root_key)
@@ -362,8 +421,10 @@ def decode(self: Tokenizer, tokens, strict: bool = False, unattached: str = "roo
     loose = np.flatnonzero((parent < 0) & ~anchored)
     if strict and len(loose):
         i = int(loose[0])
-        raise TreebookError(f"branch {i} (tokens {BLOCK * (i + 1)}..{BLOCK * (i + 1) + 7}) starts in cell {V[i, :3].tolist()}, "
-                            f"where no other branch ends and which is not the root cell {self.root_tokens.tolist()}: the tree is not connected")
+        raise TreebookError(
+            f"branch {i} (tokens {BLOCK * (i + 1)}..{BLOCK * (i + 1) + 7}) starts in cell {V[i, :3].tolist()}, "
+            f"where no other branch ends and which is not the root cell {self.root_tokens.tolist()}: the tree is not connected"
+        )
     keep = np.ones(len(V), bool)
     if unattached == "drop":
         for i in out.tolist(): keep[i] = anchored[i] if parent[i] < 0 else keep[parent[i]]
@@ -375,12 +436,15 @@ def decode(self: Tokenizer, tokens, strict: bool = False, unattached: str = "roo
     extra = {"stage": stage[out]} if has_stage else {}
     return Tree(X[:, :4], X[:, 4:], p, allow_empty=True, **extra)
 
+# %% ../nbs/03_tokens.ipynb #3d38384d
 def decode_batch(self: Tokenizer, batch, strict: bool = False, unattached: str = "root") -> list:
     "`decode` of each sequence of a (batch, length) array or a list of sequences."
     if hasattr(batch, "detach"): batch = batch.detach().cpu().numpy()
-    if isinstance(batch, np.ndarray) and batch.ndim != 2: raise TreebookError(f"a batch must be 2-D (batch, length); got shape {batch.shape}")
+    if isinstance(batch, np.ndarray) and batch.ndim != 2:
+        raise TreebookError(f"a batch must be 2-D (batch, length); got shape {batch.shape}")
     return [self.decode(s, strict, unattached) for s in batch]
 
+# %% ../nbs/03_tokens.ipynb #82aa197d
 def connectivity(self: Tokenizer, x, normalize: bool = True) -> Connectivity:
     "Connect of a token sequence (read non-strictly) or of a Tree (quantised; `normalize` as in encode)."
     V = self.quantise(x, normalize) if isinstance(x, Tree) else _parse(_as_tokens(x, False), False)[0]
@@ -391,16 +455,34 @@ Tokenizer.decode, Tokenizer.decode_batch, Tokenizer.connectivity = decode, decod
 # %% ../nbs/03_tokens.ipynb #260bb8a1
 def save(self: Tokenizer, path) -> Path:
     "Write the tokenizer to a JSON file, atomically."
-    d = {"format": "treebook.tokenizer", "version": TOKENIZER_VERSION, "rule": self.rule, "radius_rule": self.radius_rule,
-         "vocab": {"n_values": N_VALUES, "sos": SOS, "eos": EOS, "pad": PAD, "stage": STAGE, "cond": COND, "n_cond": N_COND, "vocab_size": VOCAB_SIZE},
-         "edges": {k: self.edges[a].tolist() for a, k in enumerate("xyzr")}, "meta": self.meta}
+    d = {
+        "format": "treebook.tokenizer",
+        "version": TOKENIZER_VERSION,
+        "rule": self.rule,
+        "radius_rule": self.radius_rule,
+        "vocab": {
+            "n_values": N_VALUES,
+            "sos": SOS,
+            "eos": EOS,
+            "pad": PAD,
+            "stage": STAGE,
+            "cond": COND,
+            "n_cond": N_COND,
+            "vocab_size": VOCAB_SIZE,
+        },
+        "edges": {k: self.edges[a].tolist() for a, k in enumerate("xyzr")},
+        "meta": self.meta,
+    }
     return _atomic_write(Path(path), lambda f: f.write(json.dumps(d).encode()))
 
+# %% ../nbs/03_tokens.ipynb #2aca750f
 def load(cls, path) -> Tokenizer:
     "Read a tokenizer written by `Tokenizer.save`."
     d = read_json(path, "treebook.tokenizer", TOKENIZER_VERSION, "tokenizer", version_key="version")
     if d.get("vocab", {}).get("vocab_size") != VOCAB_SIZE:
-        raise TreebookError(f"{path} was written for a vocabulary of {d.get('vocab', {}).get('vocab_size')} tokens, this treebook has {VOCAB_SIZE}")
+        raise TreebookError(
+            f"{path} was written for a vocabulary of {d.get('vocab', {}).get('vocab_size')} tokens, this treebook has {VOCAB_SIZE}"
+        )
     try: edges = [d["edges"][k] for k in "xyzr"]
     except (KeyError, TypeError): raise TreebookError(f"{path} lacks the bin edges of x, y, z and r") from None
     try: return cls(edges, d.get("rule", "uniform"), d.get("radius_rule"), d.get("meta"))

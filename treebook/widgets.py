@@ -40,12 +40,19 @@ class SampleExplorer:
         self.models, self._loaded, self.size = dict(models), {}, size
         self.model = W.Dropdown(options=list(self.models), description="model")
         self.seed = W.IntText(value=seed, description="seed")
-        self.temperature = W.FloatSlider(value=temperature, min=0.05, max=1.5, step=0.05, description="temperature", continuous_update=False)
-        self.top_p = W.FloatSlider(value=top_p, min=0.05, max=1.0, step=0.05, description="top-p", continuous_update=False)
+        self.temperature = W.FloatSlider(
+            value=temperature, min=0.05, max=1.5, step=0.05, description="temperature", continuous_update=False
+        )
+        self.top_p = W.FloatSlider(
+            value=top_p, min=0.05, max=1.0, step=0.05, description="top-p", continuous_update=False
+        )
         self.image = W.Image(format="png", width=size, height=size)
         self.label = W.HTML()
-        self.widget = W.VBox([W.HBox([self.model, self.seed]), W.HBox([self.temperature, self.top_p]), self.image, self.label])
-        for w in (self.model, self.seed, self.temperature, self.top_p): w.observe(lambda change: self.redraw(), names="value")
+        self.widget = W.VBox(
+            [W.HBox([self.model, self.seed]), W.HBox([self.temperature, self.top_p]), self.image, self.label]
+        )
+        for w in (self.model, self.seed, self.temperature, self.top_p):
+            w.observe(lambda change: self.redraw(), names="value")
         self.redraw()
 
     def _net(self):
@@ -58,7 +65,15 @@ class SampleExplorer:
         "Sample a tree with the current settings and show it."
         from treebook.growth import generate
         net, tok = self._net()
-        seq = generate(net, 1, tok=tok, temperature=self.temperature.value, top_p=self.top_p.value, seed=int(self.seed.value), min_new=4)[0]
+        seq = generate(
+            net,
+            1,
+            tok=tok,
+            temperature=self.temperature.value,
+            top_p=self.top_p.value,
+            seed=int(self.seed.value),
+            min_new=4,
+        )[0]
         self.tree = tok.decode(seq)
         self.image.value = tree_png(self.tree, size=self.size)
         self.label.value = f"{self.model.value}: {self.tree.n} branches (seed {self.seed.value}, T={self.temperature.value:.2f}, top-p={self.top_p.value:.2f})"
@@ -67,8 +82,17 @@ class SampleExplorer:
 
 # %% ../nbs/10b_widgets.ipynb #45d39946
 class GrowthExplorer:
-    "Source dropdown (growth models, procedural species), seed, and a stage slider that scrubs the grown tree. `.tree` is the stage shown."
-    def __init__(self, sources=None, seed: int = 0, stage: int = 9, size: int = 256, temperature: float = 0.9, top_p: float = 0.95):
+    """Source dropdown (growth models, procedural species), seed, and a stage slider that scrubs the grown tree. `.tree`
+    is the stage shown."""
+    def __init__(
+        self,
+        sources=None,
+        seed: int = 0,
+        stage: int = 9,
+        size: int = 256,
+        temperature: float = 0.9,
+        top_p: float = 0.95,
+    ):
         import ipywidgets as W
         from treebook.botany import SPECIES
         from treebook.train import WEIGHTS
@@ -93,8 +117,10 @@ class GrowthExplorer:
         from treebook.botany import grow
         from treebook.growth import grow_sequence
         src = self.sources[self.source.value]
-        if isinstance(src, tuple) and len(src) == 2 and src[0] == "species": self.history = grow(src[1], seed=int(self.seed.value))
-        else: self.history = grow_sequence(src, seed=int(self.seed.value), **self.sampling)
+        if isinstance(src, tuple) and len(src) == 2 and src[0] == "species":
+            self.history = grow(src[1], seed=int(self.seed.value))
+        else:
+            self.history = grow_sequence(src, seed=int(self.seed.value), **self.sampling)
         self.redraw()
 
     def redraw(self):
