@@ -5,9 +5,13 @@
 # %% ../nbs/00_tree.ipynb #81df8dab
 from __future__ import annotations
 
+import argparse
+import errno
 import json
+import math
 import os
 import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +20,8 @@ import numpy as np
 # %% auto #0
 __all__ = ['FORMAT_VERSION', 'TreebookError', 'Tree', 'children', 'depth', 'order', 'take', 'reorder', 'subtree', 'prefix',
            'from_segments', 'with_origin', 'translate', 'scale', 'rotate_z', 'mirror', 'too_far', 'origin_for', 'Frame',
-           'normalize', 'save', 'read_json', 'load', 'info', 'with_pipe_radii', 'example_tree']
+           'normalize', 'all_or_nothing', 'save', 'read_json', 'load', 'flag_number', 'info', 'with_pipe_radii',
+           'example_tree']
 
 # %% ../nbs/00_tree.ipynb #6a559f51
 class TreebookError(ValueError):
@@ -27,10 +32,13 @@ _CORE = ("start", "end", "parent")
 _RESERVED = _CORE + ("format_version", "format", "origin")
 
 # %% ../nbs/00_tree.ipynb #8d102840
-def _points(a, name) -> np.ndarray:
-    "`a` as a float32 (n, 4) array, or a `TreebookError` naming `name`."
-    try: a = np.array(a, dtype=np.float32)
-    except (TypeError, ValueError) as e: raise TreebookError(f"`{name}` must be numbers: {e}") from None
+def _points(a, name, dtype=np.float32) -> np.ndarray:
+    "`a` as a float32 (n, 4) array (or `dtype`), or a `TreebookError` naming `name`."
+    if np.asarray(a).dtype.kind == "c": raise TreebookError(f"`{name}` holds complex numbers; positions and radii are real")
+    try:
+        with np.errstate(over="ignore"): a = np.array(a, dtype=dtype)   # too large for float32: infinity, refused below
+    except (TypeError, ValueError, OverflowError) as e:
+        raise TreebookError(f"`{name}` must be numbers, four a row (x, y, z, radius): {str(e).split(chr(10))[0][:80]}") from None
     if a.ndim != 2 or a.shape[1] != 4:
         raise TreebookError(f"`{name}` must have shape (n, 4) for x, y, z, radius; got shape {a.shape}")
     return a
@@ -42,7 +50,12 @@ def _parents(p, n) -> np.ndarray:
     if p.dtype.kind == "f":
         if not np.all(np.isfinite(p)) or np.any(p != np.round(p)):
             raise TreebookError("`parent` must hold whole numbers (branch indices, -1 for a root)")
-    elif p.dtype.kind not in "iu" and n: raise TreebookError(f"`parent` must hold integers, got dtype {p.dtype}")
+    elif p.dtype.kind not in "iu" and n:
+        got = {"U": "text", "S": "text", "O": "values that are not all whole numbers", "b": "true/false values",
+               "c": "complex numbers"}.get(p.dtype.kind, f"dtype {p.dtype}")
+        raise TreebookError(f"`parent` must hold whole numbers (branch indices, -1 for a root), got {got}")
+    if p.dtype.kind in "fu" and n and np.abs(p).max() >= 2 ** 63:
+        raise TreebookError(f"`parent` holds {np.abs(p).max():.4g}, out of range: a parent must be -1 (a root) or a branch index")
     return p.astype(np.int64)
 
 def _cycle_from(parent, i):
@@ -64,14 +77,21 @@ def _check_topology(parent):
         if cyc: raise TreebookError(f"the parents of branches {' -> '.join(map(str, cyc + cyc[:1]))} form a cycle: a tree has none")
         raise TreebookError(f"branch {i} has parent {parent[i]} which comes after it: store parents before children "
                             "(for example in DFS order) or build the tree with Tree.from_segments")
+def _origin(o) -> np.ndarray:
+    "`o` as three finite float64 numbers (None: the world's origin), or a `TreebookError`."
+    if o is None: return np.zeros(3)
+    try: a = np.array(o, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError): a = None
+    if a is None or a.shape != (3,) or not np.isfinite(a).all():
+        raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {str(o.tolist() if isinstance(o, np.ndarray) else o)[:60]}")
+    return a
 
 # %% ../nbs/00_tree.ipynb #b684dca1
 class Tree:
     "A tree as `n` branch segments: `start`, `end` (n, 4: x, y, z, radius), `parent` (n,: -1 for a root), per-branch arrays."
     def __init__(self, start, end, parent, *, check: bool = True, tol: float = 1e-4, allow_empty: bool = False, origin=None, **per_branch):
         start, end = _points(start, "start"), _points(end, "end")
-        origin = np.zeros(3) if origin is None else np.array(origin, dtype=np.float64).reshape(-1)
-        if origin.shape != (3,) or not np.isfinite(origin).all(): raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {origin.tolist()}")
+        origin = _origin(origin)
         n = len(start)
         if end.shape != start.shape:
             raise TreebookError(f"`start` and `end` must have the same shape; got {start.shape} and {end.shape}")
@@ -282,8 +302,7 @@ def _map(self: Tree, f, rscale: float = 1.0) -> Tree:
 
 def with_origin(self: Tree, origin=None) -> Tree:
     "The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin into the positions)."
-    o = np.zeros(3) if origin is None else np.array(origin, dtype=np.float64).reshape(-1)
-    if o.shape != (3,) or not np.isfinite(o).all(): raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {o.tolist()}")
+    o = _origin(origin)
     if np.array_equal(o, self.origin): return self   # trees are immutable: nothing to re-express
     out = []
     for a in (self.start, self.end):
@@ -364,17 +383,54 @@ def normalize(self: Tree):
 Tree.normalize = normalize
 
 # %% ../nbs/00_tree.ipynb #410e762d
+_PENDING = []   # while an `all_or_nothing` block is open: the [(temporary file, path)] it will rename at its end
+
+def _umask() -> int:
+    m = os.umask(0o022); os.umask(m); return m
+
+def _os_reason(e: OSError, folder: Path) -> str:
+    "What an OSError means to the person who asked for the file."
+    if e.errno == errno.ENOENT and folder.exists(): return f"the folder {folder} does not take new files"
+    return (e.strerror or str(e)).lower()
+
 def _atomic_write(path: Path, write):
-    "Call `write(file)` on a temporary file beside `path`, then rename it to `path`."
+    """Call `write(file)` on a temporary file beside `path`, then rename it to `path`; the file gets the mode of the umask.
+    An OS error (a full or read-only disk) becomes a `TreebookError` naming the path, and leaves nothing behind.
+    Inside an `all_or_nothing` block the rename waits for the block's end."""
     path = Path(path)
-    if not path.parent.exists(): raise TreebookError(f"cannot write {path}: folder {path.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    if not path.parent.is_dir(): raise TreebookError(f"cannot write {path}: folder {path.parent} does not exist")
+    if path.is_dir(): raise TreebookError(f"cannot write {path}: it is a folder")
+    try: fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    except OSError as e: raise TreebookError(f"cannot write {path}: {_os_reason(e, path.parent)}") from None
     try:
         with os.fdopen(fd, "wb") as f: write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True); raise
+        os.chmod(tmp, 0o666 & ~_umask())   # mkstemp makes 0600: files follow the umask, like any other program's
+        if _PENDING: _PENDING[-1].append((tmp, path))
+        else: os.replace(tmp, path)
+    except BaseException as e:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError): raise TreebookError(f"cannot write {path}: {_os_reason(e, path.parent)}") from None
+        raise
     return path
+
+@contextmanager
+def all_or_nothing(folders=()):
+    """Within the block, files written by treebook appear only when the block ends without an error, all together;
+    after an error (or Ctrl-C) none does, and the `folders` (made for the outputs) are removed again if left empty."""
+    _PENDING.append([])
+    try: yield
+    except BaseException:
+        for tmp, _ in _PENDING.pop(): Path(tmp).unlink(missing_ok=True)
+        for d in sorted(map(Path, folders), key=lambda p: len(p.parts), reverse=True):
+            if d.is_dir() and not any(d.iterdir()): d.rmdir()
+        raise
+    done = _PENDING.pop()
+    if _PENDING: _PENDING[-1].extend(done); return   # nested: the outer block decides
+    for k, (tmp, path) in enumerate(done):
+        try: os.replace(tmp, path)
+        except OSError as e:
+            for t, _ in done[k:]: Path(t).unlink(missing_ok=True)
+            raise TreebookError(f"cannot write {path}: {_os_reason(e, path.parent)}") from None
 
 def save(self: Tree, path) -> Path:
     "Write the tree to `path` (.npz or .json), atomically."
@@ -394,47 +450,107 @@ def save(self: Tree, path) -> Path:
 
 def _check_version(v, path, what="tree", newest=FORMAT_VERSION):
     if isinstance(v, np.ndarray) and v.ndim == 0: v = v.item()  # a scalar stored in an .npz
-    if not isinstance(v, (int, np.integer)) or isinstance(v, bool): raise TreebookError(f"{path} has no valid {what} format version ({v!r})")
+    if not isinstance(v, (int, np.integer)) or isinstance(v, bool): raise TreebookError(f"{path} has no valid {what} format version ({str(v)[:40]})")
     if int(v) > newest:
         raise TreebookError(f"{path} was written by a newer treebook ({what} format {int(v)}; this one reads up to {newest}): upgrade treebook")
+
+def _not_json(c):
+    raise TreebookError(f"holds {c}, which is not a number in JSON")
 
 def read_json(path, fmt: str, newest: int, what: str, version_key: str = "format_version", hint: str = "") -> dict:
     "The JSON object in `path`, checked to be a treebook `fmt` file of a version this treebook reads (at most `newest`)."
     path = Path(path)
     if not path.is_file(): raise TreebookError(f"no such file: {path}" if not path.is_dir() else f"{path} is a folder, not a {what} file")
-    try: d = json.loads(path.read_text())
-    except (ValueError, UnicodeDecodeError) as e: raise TreebookError(f"cannot read {path} as JSON: {e}") from None
+    try: d = json.loads(path.read_text(), parse_constant=_not_json)
+    except TreebookError as e: raise TreebookError(f"{path} {e} (NaN and infinity are not allowed)") from None
+    except (ValueError, UnicodeDecodeError, RecursionError) as e:
+        raise TreebookError(f"cannot read {path} as JSON: {str(e).splitlines()[0][:100]}") from None
+    except OSError as e: raise TreebookError(f"cannot read {path}: {(e.strerror or str(e)).lower()}") from None
     if not isinstance(d, dict) or d.get("format") != fmt: raise TreebookError(f"{path} is not a treebook {what} file{hint}")
     _check_version(d.get(version_key, 1), path, what, newest)
     return d
 
+def _read_npz(path: Path) -> dict:
+    "The arrays of an .npz file, or a `TreebookError` saying in a line why not."
+    with open(path, "rb") as f: head = f.read(4)
+    if head not in (b"PK\x03\x04", b"PK\x05\x06"): raise TreebookError(f"{path} is not a .npz file (it is not a zip archive of arrays)")
+    try:
+        with np.load(path, allow_pickle=False) as z: return {k: z[k] for k in z.files}
+    except ValueError as e:
+        if "pickle" in str(e): raise TreebookError(f"{path} holds Python objects, not plain arrays: treebook does not load them") from None
+        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the file complete?") from None
+    except Exception as e:
+        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the file complete?") from None
+
+def _attrs_of_json(a) -> dict:
+    "The per-branch arrays of a JSON tree: {name: {'dtype': numpy dtype, 'data': list}}."
+    if not isinstance(a, dict): raise TreebookError("`attrs` must map names to {\"dtype\": ..., \"data\": [...]}")
+    out = {}
+    for k, v in a.items():
+        if not isinstance(v, dict) or "data" not in v or not isinstance(v.get("dtype"), str):
+            raise TreebookError(f"per-branch array {k!r} must be {{\"dtype\": ..., \"data\": [...]}}")
+        try: dt = np.dtype(v["dtype"])
+        except TypeError: raise TreebookError(f"per-branch array {k!r} has the unknown dtype {v['dtype'][:20]!r}") from None
+        try: out[k] = np.array(v["data"], dtype=dt)
+        except (TypeError, ValueError, OverflowError): raise TreebookError(f"per-branch array {k!r} does not hold {dt} values") from None
+    return out
+
+def _checked_arrays(start, end, parent, origin, attrs) -> dict:
+    "The arrays of a tree file, checked; float64 positions that float32 cannot hold get an origin (map coordinates)."
+    start, end, origin = _points(start, "start", np.float64), _points(end, "end", np.float64), _origin(origin)
+    if start.shape == end.shape and np.isfinite(start).all() and np.isfinite(end).all():
+        o = origin_for(np.concatenate([start[:, :3], end[:, :3]]))
+        if o is not None:
+            start, end = start.copy(), end.copy()
+            start[:, :3] -= o; end[:, :3] -= o; origin = origin + o
+    for k, v in attrs.items():
+        if k in ("check", "tol", "allow_empty"): raise TreebookError(f"per-branch array name {k!r} is reserved")
+        if v.dtype.kind not in "biufU": raise TreebookError(f"per-branch array {k!r} must hold numbers or text, got dtype {v.dtype}")
+    return dict(start=start, end=end, parent=parent, origin=origin, **attrs)
+
 def load(cls, path, check: bool = True) -> Tree:
-    "Read a tree saved by `Tree.save` (.npz or .json)."
+    "Read a tree saved by `Tree.save` (.npz or .json); float64 positions far from the origin are kept about one."
     path = Path(path)
     if not path.exists(): raise TreebookError(f"no such file: {path}")
     if path.is_dir(): raise TreebookError(f"{path} is a folder, not a tree file")
     suffix = path.suffix.lower()
+    if suffix not in (".npz", ".json"): raise TreebookError(f"cannot read {path.name!r} as a tree: expected a .npz or .json file")
     if suffix == ".npz":
-        try:
-            with np.load(path, allow_pickle=False) as z: arrays = {k: z[k] for k in z.files}
-        except Exception as e: raise TreebookError(f"cannot read {path} as .npz ({type(e).__name__}: {e}); is the file complete?") from None
+        arrays = _read_npz(path)
         _check_version(arrays.pop("format_version", 1), path)
         missing = [k for k in _CORE if k not in arrays]
         if missing: raise TreebookError(f"{path} is missing the array(s) {', '.join(missing)}: a tree .npz needs start, end and parent")
-        try: return cls(arrays.pop("start"), arrays.pop("end"), arrays.pop("parent"), check=check, origin=arrays.pop("origin", None), **arrays)
-        except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
-    if suffix == ".json":
+        parts = [arrays.pop(k) for k in _CORE] + [arrays.pop("origin", None), arrays]
+    else:
         d = read_json(path, "treebook.tree", FORMAT_VERSION, "tree")
         missing = [k for k in _CORE if k not in d]
         if missing: raise TreebookError(f"{path} is missing {', '.join(missing)}: a tree needs start, end and parent")
-        attrs = {k: np.array(v["data"], dtype=np.dtype(v["dtype"])) for k, v in d.get("attrs", {}).items()}
-        try: return cls(np.array(d["start"], np.float32).reshape(-1, 4) if d["start"] == [] else d["start"],
-                        np.array(d["end"], np.float32).reshape(-1, 4) if d["end"] == [] else d["end"],
-                        np.array(d["parent"], np.int64), check=check, origin=d.get("origin"), **attrs)
+        empty = lambda v: np.zeros((0, 4)) if isinstance(v, list) and not v else v
+        try: parent = np.array(d["parent"])
+        except (ValueError, OverflowError): parent = np.array([], dtype=object)
+        if parent.dtype.kind == "O": raise TreebookError(f"{path}: `parent` must be a list of whole numbers (branch indices, -1 for a root)")
+        try: attrs = _attrs_of_json(d.get("attrs", {}))
         except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
-    raise TreebookError(f"cannot read {path.name!r} as a tree: expected a .npz or .json file")
+        parts = [empty(d["start"]), empty(d["end"]), parent, d.get("origin"), attrs]
+    try: return cls(**_checked_arrays(*parts), check=check)
+    except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
 
 Tree.save, Tree.load = save, classmethod(load)
+
+# %% ../nbs/00_tree.ipynb #aad2ea02
+def flag_number(kind=float, lo=None, hi=None, above=None):
+    "An argparse `type=` for a numeric flag: `kind` (int or float), finite, at least `lo` (or more than `above`), at most `hi`."
+    what = "a whole number" if kind is int else "a finite number"
+    low = f">= {lo:g}" if lo is not None else f"> {above:g}" if above is not None else ""
+    rng = f" in {lo:g}..{hi:g}" if lo is not None and hi is not None else (f" {low}" if low else "") + (f" <= {hi:g}" if hi is not None and not low else f" and <= {hi:g}" if hi is not None else "")
+    def parse(s):
+        try: v = int(s) if kind is int else float(s)
+        except (TypeError, ValueError): raise argparse.ArgumentTypeError(f"expected {what}{rng}, got {s!r}") from None
+        if not math.isfinite(v) or (lo is not None and v < lo) or (above is not None and v <= above) or (hi is not None and v > hi):
+            raise argparse.ArgumentTypeError(f"must be {what}{rng}, got {s!r}")
+        return v
+    parse.__name__ = "whole number" if kind is int else "number"
+    return parse
 
 # %% ../nbs/00_tree.ipynb #c405bf6d
 def info(self: Tree) -> dict:
