@@ -153,4 +153,4 @@ def test_image2tree_fits_the_silhouette_by_default(treebook_cmd, tmp_path):
         iou[tag] = silhouette_scores(silhouette(Tree.load(files[0])), im)["iou"]
     assert iou["fit"] > iou["raw"], iou
     r = run(treebook_cmd, "image2tree", tmp_path / "sil.png", "--candidates", "0", "--out", tmp_path / "x")
-    assert r.returncode == 2 and "--candidates must be at least 1" in r.stderr
+    assert r.returncode == 2 and "argument --candidates: must be a whole number in 1..64" in r.stderr

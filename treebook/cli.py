@@ -6,17 +6,20 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
+import tempfile
 import time
 import warnings
 from pathlib import Path
 
-from .tree import TreebookError
+from .tree import TreebookError, all_or_nothing, can_write_in, flag_number, out_folder
 
 # %% auto #0
-__all__ = ['DEMO_STEPS', 'save_image', 'cmd_info', 'cmd_export', 'cmd_render', 'cmd_generate', 'write_trees', 'cmd_grammar',
-           'cmd_enhance', 'cmd_propagate', 'cmd_reconstruct', 'cmd_train', 'cmd_sample', 'cmd_grow', 'cmd_complete',
-           'demo_step', 'cmd_demo', 'build_parser', 'main']
+__all__ = ['MAX_SAMPLES', 'DEMO_STEPS', 'save_image', 'cmd_info', 'cmd_export', 'cmd_render', 'cmd_generate', 'write_trees',
+           'cmd_grammar', 'cmd_enhance', 'cmd_propagate', 'cmd_reconstruct', 'cmd_train', 'cmd_sample', 'cmd_grow',
+           'cmd_complete', 'demo_step', 'cmd_demo', 'build_parser', 'main']
 
 # %% ../nbs/11_cli.ipynb #55470e73
 class _Parser(argparse.ArgumentParser):
@@ -25,11 +28,32 @@ class _Parser(argparse.ArgumentParser):
         raise TreebookError(f"{message} (see '{self.prog} --help')")
 
 def _out_path(path: str, suffixes: tuple, what: str) -> Path:
-    "Check that `path` ends in one of `suffixes` and that its folder exists."
+    "Check, before any work, that `path` ends in one of `suffixes` and can be written."
     p = Path(path)
     if p.suffix.lower() not in suffixes: raise TreebookError(f"{what} must end in {' or '.join(suffixes)}, got {p.name!r}")
+    if p.is_dir(): raise TreebookError(f"cannot write {p}: it is a folder")
     if not p.parent.exists(): raise TreebookError(f"cannot write {p}: folder {p.parent} does not exist")
+    if not p.parent.is_dir(): raise TreebookError(f"cannot write {p}: {p.parent} is a file, not a folder")
+    can_write_in(p.parent, p)
     return p
+
+@contextlib.contextmanager
+def _unmade_on_error(made):
+    "After an error, remove the folders in `made` (made for the outputs) that are left empty."
+    try: yield
+    except BaseException:
+        for d in made:
+            if d.is_dir() and not any(d.iterdir()): d.rmdir()
+        raise
+
+def _model_arg(model):
+    "A --model that is a path (a / or .pt in it) must be a checkpoint file; a name is looked up by the library."
+    s = str(model)
+    if model is None or (os.sep not in s and not s.endswith(".pt")): return model
+    p = Path(s)
+    if p.is_dir(): raise TreebookError(f"--model {p} is a folder: give a checkpoint (.pt), e.g. best.pt of a `treebook train` run")
+    if not p.is_file(): raise TreebookError(f"no such model file: {p}")
+    return model
 
 def save_image(img, path) -> Path:
     "Save a PIL image atomically (.png or .jpg)."
@@ -58,47 +82,49 @@ def cmd_info(args):
 def cmd_export(args):
     from treebook.tree import Tree
     from treebook import mesh
+    out = _out_path(args.out, (".ply",), "a skeleton file") if args.skeleton else _out_path(args.out, mesh.MESH_FORMATS, "a mesh file")
     t = Tree.load(args.tree)
-    if args.skeleton:
-        p = mesh.export_skeleton(t, _out_path(args.out, (".ply",), "a skeleton file"))
-    else:
-        p = mesh.export_mesh(t, _out_path(args.out, mesh.MESH_FORMATS, "a mesh file"), sides=args.sides, leaves=args.leaves, seed=args.seed)
+    if args.skeleton: p = mesh.export_skeleton(t, out)
+    else: p = mesh.export_mesh(t, out, sides=args.sides, leaves=args.leaves, seed=args.seed)
     print(f"wrote {p}"); return 0
 
 def cmd_render(args):
     from treebook.tree import Tree
     from treebook.render import render
-    t = Tree.load(args.tree)
     out = _out_path(args.out, (".png", ".jpg", ".jpeg"), "an image file")
+    t = Tree.load(args.tree)
     img = render(t, view=args.view, size=(args.size, args.size), leaves=args.leaves, backend=args.backend)
     print(f"wrote {save_image(img, out)}"); return 0
 
 # %% ../nbs/11_cli.ipynb #479455c3
 def cmd_generate(args):
     from treebook.datasets import generate_dataset
-    m = generate_dataset(args.species, args.n, args.out, max_branches=args.max_branches, stages=args.stages, scans=args.scans,
-                         images=args.images, trees=args.trees, workers=args.workers, seed=args.seed)
+    out, made = out_folder(args.out)
+    with _unmade_on_error(made):   # shards written stay (a second run resumes); a failure before the first leaves no folder
+        m = generate_dataset(args.species, args.n, out, max_branches=args.max_branches, stages=args.stages, scans=args.scans,
+                             images=args.images, trees=args.trees, workers=args.workers, seed=args.seed)
     counts = m.get("counts", {})
     print(f"wrote {args.out}/manifest.json: " + (", ".join(f"{k} {v}" for k, v in counts.items()) if counts else f"{args.n} trees"))
     return 0
 
 # %% ../nbs/11_cli.ipynb #4d9d3111
 def write_trees(trees, out_dir, stem: str = "tree", mesh: bool = True, picture: bool = False, seed: int = 0) -> list:
-    "Write each tree as OUT/STEM_000.npz (+ .obj mesh, + .png picture); return the paths written."
+    "Write each tree as OUT/STEM_000.npz (+ .obj mesh, + .png picture), all or none; return the paths written."
     from treebook.mesh import export_mesh, tree_mesh
-    out = Path(out_dir)
-    try: out.mkdir(parents=True, exist_ok=True)
-    except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {e.strerror}") from None
+    out, made = out_folder(out_dir)
     paths = []
-    for k, t in enumerate(trees):
-        name = out / f"{stem}_{k:03d}" if len(trees) > 1 or stem == "tree" else out / stem
-        paths.append(t.save(name.with_suffix(".npz")))
-        if mesh or picture:
-            m = tree_mesh(t, seed=seed)
-            if mesh: paths.append(export_mesh(m, name.with_suffix(".obj")))
-            if picture:
-                from treebook.render import render
-                paths.append(save_image(render(m, size=(512, 512)), name.with_suffix(".png")))
+    with all_or_nothing(made):
+        try: out.mkdir(parents=True, exist_ok=True)
+        except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
+        for k, t in enumerate(trees):
+            name = out / f"{stem}_{k:03d}" if len(trees) > 1 or stem == "tree" else out / stem
+            paths.append(t.save(name.with_suffix(".npz")))
+            if mesh or picture:
+                m = tree_mesh(t, seed=seed)
+                if mesh: paths.append(export_mesh(m, name.with_suffix(".obj")))
+                if picture:
+                    from treebook.render import render
+                    paths.append(save_image(render(m, size=(512, 512)), name.with_suffix(".png")))
     return paths
 
 def cmd_grammar(args):
@@ -112,13 +138,14 @@ def cmd_grammar(args):
 
 def cmd_enhance(args):
     from treebook.wavelet import enhance
+    out_folder(args.out)
     t = enhance(args.scan, levels=args.levels, grid=args.grid, up=args.up, symmetrize=args.symmetrize, seed=args.seed)
     for p in write_trees([t], args.out, "enhanced", picture=args.render, seed=args.seed): print(f"wrote {p}")
     return 0
 
 def cmd_propagate(args):
     from treebook.lsystem import propagate
-    if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
+    out_folder(args.out)
     trees = propagate(args.grammar, n=args.n, seed=args.seed)
     for p in write_trees(trees, args.out, "propagated", picture=args.render, seed=args.seed): print(f"wrote {p}")
     return 0
@@ -139,10 +166,13 @@ def cmd_reconstruct(args):
     meshes = [tree_mesh(t, sides=12).apply_translation(t.origin) for t in made]   # in the scan's coordinates
     print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's diagonal of {coverage(pts, meshes):.1%} of its {len(pts):,} points")
     numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p  # --trees all: tree_1.npz, tree_2.npz ...
-    for i, (tree, mesh) in enumerate(zip(made, meshes)):
-        print(f"wrote {tree.save(numbered(out, i))}")
-        if mesh_out: print(f"wrote {export_mesh(mesh, numbered(mesh_out, i))}")
-        if skel_out: print(f"wrote {export_skeleton(tree, numbered(skel_out, i))}")
+    wrote = []
+    with all_or_nothing():   # the tree, the mesh and the skeleton: all of them, or (if one cannot be written) none
+        for i, (tree, mesh) in enumerate(zip(made, meshes)):
+            wrote.append(tree.save(numbered(out, i)))
+            if mesh_out: wrote.append(export_mesh(mesh, numbered(mesh_out, i)))
+            if skel_out: wrote.append(export_skeleton(tree, numbered(skel_out, i)))
+    for p in wrote: print(f"wrote {p}")
     return 0
 
 # %% ../nbs/11_cli.ipynb #45436cc7
@@ -152,9 +182,11 @@ def cmd_train(args):
     train_main(args.rest, parser_class=_Parser)
     return 0
 
+MAX_SAMPLES = 100_000   # `sample --n`: drawn in batches of bounded memory, written when all are drawn
+
 def cmd_sample(args):
     from treebook.train import sample_trees
-    if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
+    out_folder(args.out); _model_arg(args.model)
     trees = sample_trees(args.n, model=args.model, temperature=args.temperature, top_p=args.top_p, top_k=args.top_k,
                          seed=args.seed, structure=not args.no_structure, progress=True)
     for p in write_trees(trees, args.out, f"sampled_{Path(str(args.model)).stem}", picture=args.render, seed=args.seed): print(f"wrote {p}")
@@ -168,38 +200,50 @@ def _sampling_threads():
 
 def cmd_grow(args):
     from treebook.growth import grow_sequence, write_growth
+    out, made = out_folder(args.out); _model_arg(args.model)
     _sampling_threads()
     stages = grow_sequence(args.model, seed=args.seed, stages=args.stages, temperature=args.temperature, top_p=args.top_p, progress=True)
-    for p in write_growth(stages, args.out): print(f"wrote {p}")
+    with all_or_nothing(made): paths = write_growth(stages, out)
+    for p in paths: print(f"wrote {p}")
     return 0
 
 def cmd_complete(args):
     from treebook.tree import Tree
     from treebook.growth import complete
     from treebook.growth import write_trees as write_grid
-    if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
+    out, made = out_folder(args.out); _model_arg(args.model)
     partial = Tree.load(args.partial)
     _sampling_threads()
     trees = complete(partial, n=args.n, seed=args.seed, model=args.model, temperature=args.temperature, top_p=args.top_p, progress=True)
-    for p in write_grid(trees, args.out, "completion", first=partial): print(f"wrote {p}")
+    with all_or_nothing(made): paths = write_grid(trees, out, "completion", first=partial)
+    for p in paths: print(f"wrote {p}")
     return 0
+
+def _read_image(path):
+    from PIL import Image, UnidentifiedImageError
+    p = Path(path)
+    if p.is_dir(): raise TreebookError(f"{p} is a folder: give an image file (.png or .jpg)")
+    if not p.is_file(): raise TreebookError(f"no such image file: {p}")
+    try:
+        img = Image.open(p); img.load()
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
+        raise TreebookError(f"cannot read {p} as an image ({str(e).splitlines()[0][:80]}): give a PNG or JPEG") from None
+    return img
 
 def _cmd_condition(kind):
     def run(args):
         from treebook import condition
-        if args.n < 1: raise TreebookError(f"--n must be at least 1, got {args.n}")
-        if kind != "points" and args.candidates < 1: raise TreebookError(f"--candidates must be at least 1, got {args.candidates}")
+        out_folder(args.out); _model_arg(args.model)
+        if kind == "sketch": given = condition.read_lines(args.input); condition.sketch_input(given)   # read and checked before any model
+        elif kind == "points":
+            from treebook.pointio import read_points
+            given = read_points(args.input, up=args.up); condition.points_input(given)
+        else: given = _read_image(args.input); condition.image_input(given)
         kw = dict(n=args.n, seed=args.seed, temperature=args.temperature, top_p=args.top_p)
         _sampling_threads()
-        if kind == "sketch": trees = condition.sketch_to_tree(args.input, model=args.model or "elm-sketch", fit=args.fit, candidates=args.candidates, **kw)
-        elif kind == "points": trees = condition.points_to_tree(args.input, model=args.model or "elm-points", up=args.up, **kw)
-        else:
-            from PIL import Image, UnidentifiedImageError
-            p = Path(args.input)
-            if not p.is_file(): raise TreebookError(f"no such image file: {p}")
-            try: img = Image.open(p)
-            except (UnidentifiedImageError, OSError) as e: raise TreebookError(f"cannot read {p} as an image: {e}") from None
-            trees = condition.image_to_tree(img, model=args.model or "elm-image", fit=args.fit, candidates=args.candidates, **kw)
+        if kind == "sketch": trees = condition.sketch_to_tree(given, model=args.model or "elm-sketch", fit=args.fit, candidates=args.candidates, **kw)
+        elif kind == "points": trees = condition.points_to_tree(given, model=args.model or "elm-points", up="z", **kw)
+        else: trees = condition.image_to_tree(given, model=args.model or "elm-image", fit=args.fit, candidates=args.candidates, **kw)
         for p in write_trees([t for t in trees if t.n], args.out, f"{kind}_to_tree", picture=args.render, seed=args.seed): print(f"wrote {p}")
         return 0
     return run
@@ -243,32 +287,40 @@ for key, name, target, sub in [
     demo_step(key, name)(_lazy_step(target, sub))
 
 def cmd_demo(args):
-    out = Path(args.out)
-    try: out.mkdir(parents=True, exist_ok=True)
-    except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {e.strerror}") from None
+    out, made = out_folder(args.out)
     keys = list(DEMO_STEPS) if args.steps is None else [k.strip() for k in args.steps.split(",") if k.strip()]
     unknown = [k for k in keys if k not in DEMO_STEPS]
     if unknown or not keys: raise TreebookError(f"unknown demo step(s) {', '.join(unknown) or '(none given)'}: choose from {', '.join(DEMO_STEPS)}")
     t0 = time.time()
-    for k, key in enumerate(keys, 1):
-        name, step = DEMO_STEPS[key]
-        t1 = time.time()
-        print(f"[{k}/{len(keys)}] {name}", flush=True)
-        for p in step(out, args.seed): print(f"      wrote {p}")
-        print(f"      ({time.time() - t1:.1f} s)", flush=True)
+    with _unmade_on_error(made):   # each step's files are complete when it ends; a failure before any leaves no folder
+        try: out.mkdir(parents=True, exist_ok=True)
+        except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
+        for k, key in enumerate(keys, 1):
+            name, step = DEMO_STEPS[key]
+            t1 = time.time()
+            print(f"[{k}/{len(keys)}] {name}", flush=True)
+            for p in step(out, args.seed): print(f"      wrote {p}")
+            print(f"      ({time.time() - t1:.1f} s)", flush=True)
     print(f"demo done in {time.time() - t0:.1f} s: files in {out}/")
     return 0
 
 # %% ../nbs/11_cli.ipynb #16ec11e1
+def _grid_size(s: str) -> int:
+    "`--grid`: a power of two in 8..1024."
+    g = flag_number(int, 8, 1024)(s)
+    if g & (g - 1): raise argparse.ArgumentTypeError(f"must be a power of two in 8..1024 (64, 128, 256...), got {s!r}")
+    return g
+
 def build_parser() -> argparse.ArgumentParser:
     "The `treebook` argument parser with all subcommands."
     from treebook import __version__
+    SEED = flag_number(int, 0, 2 ** 32 - 1)
     p = _Parser(prog="treebook", description="Learn, generate and reconstruct 3D trees.")
     p.add_argument("--version", action="version", version=f"treebook {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     s = sub.add_parser("demo", help="run the tour of treebook on shipped data (offline)", description="Run every demo step; write the results into --out.")
     s.add_argument("--out", default="treebook-demo", help="output folder (default: treebook-demo)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--steps", default=None, help=f"comma-separated steps to run (default: all of {', '.join(DEMO_STEPS)})")
     s.set_defaults(func=cmd_demo)
     s = sub.add_parser("info", help="describe a tree file", description="Print branch count, height, depth and bounding box of a tree (.npz or .json).")
@@ -279,51 +331,51 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--out", required=True, help="output file: .obj, .glb or .ply")
     s.add_argument("--skeleton", action="store_true", help="write the skeleton (PLY: x y z radius per node, edges) instead of a mesh")
-    s.add_argument("--sides", type=int, default=10, help="vertices around each ring (default: 10)")
+    s.add_argument("--sides", type=flag_number(int, 3, 256), default=10, help="vertices around each ring (default: 10)")
     s.add_argument("--leaves", action="store_true", help="add procedural leaves on the tips")
-    s.add_argument("--seed", type=int, default=0, help="random seed for the leaves (default: 0)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed for the leaves (default: 0)")
     s.set_defaults(func=cmd_export)
     s = sub.add_parser("render", help="draw a tree into a PNG", description="Render a tree offscreen (pyvista, or matplotlib when no OpenGL).")
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--out", required=True, help="output image: .png or .jpg")
     s.add_argument("--view", default="iso", choices=["iso", "front", "side", "top"], help="camera direction (default: iso)")
-    s.add_argument("--size", type=int, default=768, help="image width and height in pixels (default: 768)")
+    s.add_argument("--size", type=flag_number(int, 16, 8192), default=768, help="image width and height in pixels (default: 768)")
     s.add_argument("--leaves", action="store_true", help="draw procedural leaves on the tips")
     s.add_argument("--backend", default="auto", choices=["auto", "pyvista", "matplotlib"], help="renderer (default: auto)")
     s.set_defaults(func=cmd_render)
     s = sub.add_parser("generate", help="grow a dataset of procedural trees", description="Grow trees of one species into sharded .npz files plus manifest.json (resumable).")
     s.add_argument("--species", required=True, help="elm, hickory, shadbush, spruce, tulip or vitellaria")
-    s.add_argument("--n", type=int, required=True, help="number of trees")
-    s.add_argument("--max-branches", type=int, default=None, help="branch cap (default: the species preset's)")
-    s.add_argument("--stages", type=int, default=1, help="growth stages kept per tree (default: 1, the grown tree)")
+    s.add_argument("--n", type=flag_number(int, 1, 10_000_000), required=True, help="number of trees")
+    s.add_argument("--max-branches", type=flag_number(int, 2, 100_000), default=None, help="branch cap (default: the species preset's)")
+    s.add_argument("--stages", type=flag_number(int, 1, 1000), default=1, help="growth stages kept per tree (default: 1, the grown tree)")
     s.add_argument("--scans", action="store_true", help="also write virtual scans with per-point labels")
     s.add_argument("--images", action="store_true", help="also write silhouette images and sketches")
     s.add_argument("--trees", action="store_true", help="also write every tree as its own .npz (trees/tree_00000.npz, ...)")
-    s.add_argument("--workers", type=int, default=2, help="worker processes (default: 2)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--workers", type=flag_number(int, 1, 256), default=2, help="worker processes (default: 2)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_generate)
     def scan_args(s):
         s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
-        s.add_argument("--grid", type=int, default=128, help="voxel grid size, a power of two >= 8 (default: 128)")
+        s.add_argument("--grid", type=_grid_size, default=128, help="voxel grid size, a power of two >= 8 (default: 128)")
         s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
         s.add_argument("--symmetrize", action="store_true", help="mirror the scan about the vertical plane through the root first")
     s = sub.add_parser("grammar", help="infer a wavelet shape grammar from a scan", description="Voxelise a scan, decompose it with 3D Haar wavelets, build a tree per dyad and infer L-system productions (Friedman and Stamos 2013).")
     scan_args(s)
-    s.add_argument("--v", type=float, default=0.2, help="lossy compression threshold on orthonormal Haar coefficients (default: 0.2)")
+    s.add_argument("--v", type=flag_number(float, 0), default=0.2, help="lossy compression threshold on orthonormal Haar coefficients (default: 0.2)")
     s.add_argument("--out", required=True, help="grammar file (.json)")
     s.set_defaults(func=cmd_grammar)
     s = sub.add_parser("enhance", help="add detail to a scan's skeleton with its own grammar", description="Infer the grammar of a scan and apply its productions to grow finer levels than were scanned.")
     scan_args(s)
-    s.add_argument("--levels", type=int, default=1, help="finer levels to add (default: 1)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--levels", type=flag_number(int, 0, 4), default=1, help="finer levels to add (default: 1)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_enhance)
     s = sub.add_parser("propagate", help="grow new trees from a grammar", description="Grow n different trees like the scanned one from a grammar JSON.")
     s.add_argument("grammar", help="grammar file written by `treebook grammar`")
-    s.add_argument("--n", type=int, default=5, help="number of trees (default: 5)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--n", type=flag_number(int, 1, 10_000), default=5, help="number of trees (default: 5)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_propagate)
@@ -339,35 +391,35 @@ def build_parser() -> argparse.ArgumentParser:
                    help="branch radii measured from the points (default; the mesh hugs the scan) or from the pipe model scaled by the trunk (a clean taper)")
     s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
                    help="when the scan seems to hold several trees: join them into one (default, with a warning), keep the largest, or write all (OUT_1, OUT_2 ...)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.set_defaults(func=cmd_reconstruct)
     s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False, description="Train a TreeTransformer (see `treebook train --help`).")
     s.add_argument("rest", nargs=argparse.REMAINDER, help="the options of `treebook train`")
     s.set_defaults(func=cmd_train)
     s = sub.add_parser("sample", help="sample trees from a shipped model", description="Sample trees from a pretrained HourglassTree model.")
-    s.add_argument("--n", type=int, default=16, help="number of trees (default: 16)")
+    s.add_argument("--n", type=flag_number(int, 1, MAX_SAMPLES), default=16, help="number of trees (default: 16)")
     s.add_argument("--model", default="elm", help="shipped model name or a checkpoint path (default: elm)")
-    s.add_argument("--temperature", type=float, default=1.0, help="sampling temperature (default: 1.0, the model's own distribution)")
-    s.add_argument("--top-p", type=float, default=1.0, help="nucleus sampling mass (default: 1.0, off)")
-    s.add_argument("--top-k", type=int, default=None, help="keep only the k likeliest tokens (default: off)")
+    s.add_argument("--temperature", type=flag_number(float, 0), default=1.0, help="sampling temperature (default: 1.0, the model's own distribution)")
+    s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=1.0, help="nucleus sampling mass (default: 1.0, off)")
+    s.add_argument("--top-k", type=flag_number(int, 1), default=None, help="keep only the k likeliest tokens (default: off)")
     s.add_argument("--no-structure", action="store_true", help="turn structure-aware decoding off")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_sample)
     def sampling_args(s, model):
         s.add_argument("--model", default=model, help=f"shipped model name or a checkpoint path (default: {model or 'the one for this input'})")
-        s.add_argument("--temperature", type=float, default=0.9, help="sampling temperature (default: 0.9)")
-        s.add_argument("--top-p", type=float, default=0.95, help="nucleus sampling mass (default: 0.95)")
-        s.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+        s.add_argument("--temperature", type=flag_number(float, 0), default=0.9, help="sampling temperature (default: 0.9)")
+        s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=0.95, help="nucleus sampling mass (default: 0.95)")
+        s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
         s.add_argument("--out", required=True, help="output folder")
     s = sub.add_parser("grow", help="sample a growing tree: one tree per growth stage", description="Sample the stages of one growing tree from a growth model; writes stage_XX.npz, meshes, a filmstrip PNG and a GIF.")
-    s.add_argument("--stages", type=int, default=10, help="number of stages (default: 10)")
+    s.add_argument("--stages", type=flag_number(int, 1, 1000), default=10, help="number of stages (default: 10)")
     sampling_args(s, "elm-grow")
     s.set_defaults(func=cmd_grow)
     s = sub.add_parser("complete", help="complete a partial tree", description="Use a partial tree as the prompt and sample completions that keep its branches.")
     s.add_argument("partial", help="partial tree (.npz or .json)")
-    s.add_argument("--n", type=int, default=4, help="number of completions (default: 4)")
+    s.add_argument("--n", type=flag_number(int, 1, 10_000), default=4, help="number of completions (default: 4)")
     sampling_args(s, "elm")
     s.set_defaults(func=cmd_complete)
     for name, kind, what in (("sketch2tree", "sketch", "a 2D sketch: a .json list of [x0, y0, x1, y1] segments or an .svg of lines"),
@@ -375,12 +427,12 @@ def build_parser() -> argparse.ArgumentParser:
                              ("image2tree", "image", "a silhouette image (.png or .jpg)")):
         s = sub.add_parser(name, help=f"a tree from {what.split(':')[0]}", description=f"Sample trees conditioned on {what}.")
         s.add_argument("input", help=what)
-        s.add_argument("--n", type=int, default=1, help="number of trees (default: 1)")
+        s.add_argument("--n", type=flag_number(int, 1, 10_000), default=1, help="number of trees (default: 1)")
         if kind == "points": s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
         if kind != "points":
             s.add_argument("--fit", action=argparse.BooleanOptionalAction, default=True,
                            help=f"pull the tree onto the {'silhouette' if kind == 'image' else 'strokes'} (default: on)")
-            s.add_argument("--candidates", type=int, default=4, help="sample this many trees per output and keep the one whose outline matches best (default: 4)")
+            s.add_argument("--candidates", type=flag_number(int, 1, 64), default=4, help="sample this many trees per output and keep the one whose outline matches best (default: 4)")
         s.add_argument("--render", action="store_true", help="also write a PNG per tree")
         sampling_args(s, None)
         s.set_defaults(func=_cmd_condition(kind))
@@ -390,16 +442,41 @@ def _say_warning(message, category, filename, lineno, file=None, line=None):
     "How the command shows a warning: one line on stderr, `warning: ...`, without the source line."
     print(f"warning: {message}", file=sys.stderr)
 
+# the library speaks to Python callers; on the command line its hints name what a shell user can do instead
+_FOR_THE_SHELL = [(" (an empty tree is only allowed with allow_empty=True)", ""),
+                  ("; use Tree.from_segments to infer parents, or check=False", ": the file's parent indices are wrong"),
+                  (" or build the tree with Tree.from_segments", ""),
+                  ("save it again with TreeTransformer.save", "give a .pt written by `treebook train`"),
+                  ("pass resume=True / --resume", "pass --resume"), ("generate_dataset / treebook generate", "`treebook generate`"),
+                  ("(pass up='y' for y-up files)", "(pass --up y for y-up files)")]
+
+def _for_the_shell(message: str) -> str:
+    "A library message as one line for the command line."
+    import re
+    for lib, shell in _FOR_THE_SHELL: message = message.replace(lib, shell)
+    return re.sub(r"\[Errno \d+\] ", "", " ".join(message.split()))
+
+def _quiet_stdout():
+    "The reader closed the pipe (`treebook info X | head -1`): send what is left to /dev/null, as `head` expects."
+    try: os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError): pass
+
 def main(argv=None) -> int:
-    "Entry point of the `treebook` command; returns the exit status (2 for a user error)."
+    """Entry point of the `treebook` command; returns the exit status: 2 for a user error (one line on stderr),
+    130 after Ctrl-C, 141 when the reader of the output closed the pipe (quietly, like any Unix tool)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _say_warning
         try:
-            if argv[:1] == ["train"]: return cmd_train(argparse.Namespace(rest=argv[1:]))  # its own parser: options pass through untouched
-            args = build_parser().parse_args(argv)
-            return args.func(args) or 0
+            if argv[:1] == ["train"]: code = cmd_train(argparse.Namespace(rest=argv[1:]))  # its own parser: options pass through untouched
+            else:
+                args = build_parser().parse_args(argv)
+                code = args.func(args) or 0
+            sys.stdout.flush()   # a closed pipe shows here, not at exit
+            return code
         except TreebookError as e:
-            print(f"error: {e}", file=sys.stderr); return 2
+            print(f"error: {_for_the_shell(str(e))}", file=sys.stderr); return 2
+        except BrokenPipeError:
+            _quiet_stdout(); return 141
         except KeyboardInterrupt:
             print("error: interrupted", file=sys.stderr); return 130

@@ -159,6 +159,7 @@ def read_lines(src) -> np.ndarray:
         try: d = json.loads(text) if text.strip() else []
         except ValueError as e: raise TreebookError(f"cannot read {p} as JSON: {e}") from None
         d = d.get("lines", []) if isinstance(d, dict) else d
+        if not isinstance(d, list): raise TreebookError(f"{p} must hold a list of segments [x0, y0, x1, y1]")
         try: a = np.asarray(d, np.float64).reshape(-1, 4) if len(d) else np.zeros((0, 4))
         except (ValueError, TypeError): raise TreebookError(f"{p} must hold a list of segments [x0, y0, x1, y1]") from None
     elif p.suffix.lower() == ".svg":

@@ -5,7 +5,10 @@
 # %% ../nbs/08b_pointio.ipynb #84946190
 from __future__ import annotations
 
+import os
+import sys
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +19,9 @@ POINT_FORMATS = (".xyz", ".txt", ".pts", ".csv", ".ply", ".pcd", ".las", ".laz",
 
 def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.ndarray:
     "`p` as a float64 (n, 3) array of usable points, or a `TreebookError` naming what is wrong."
+    if np.asarray(p).dtype.kind == "c": raise TreebookError(f"{name} holds complex numbers; points are real x, y, z")
     try: p = np.asarray(p, dtype=np.float64)
-    except (TypeError, ValueError) as e: raise TreebookError(f"{name} must be numbers: {e}") from None
+    except (TypeError, ValueError) as e: raise TreebookError(f"{name} must be numbers: {str(e).splitlines()[0][:80]}") from None
     if p.ndim != 2 or p.shape[1] < 3: raise TreebookError(f"{name} must have shape (n, 3) for x, y, z; got {p.shape}")
     p = p[:, :3]
     if len(p) == 0: raise TreebookError(f"{name} is empty: it has no points")
@@ -25,6 +29,9 @@ def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.n
     bad = np.flatnonzero(~np.isfinite(p).all(1))
     if len(bad): raise TreebookError(f"{name} has {len(bad)} point(s) with NaN or infinity (first: point {bad[0]}, {p[bad[0]].tolist()}); remove them")
     if np.ptp(p, 0).max() <= 0: raise TreebookError(f"all {len(p)} points of {name} are identical: there is no shape to read")
+    q = p - p.mean(0)
+    ev = np.linalg.eigvalsh(q.T @ q)   # spread along the three principal axes, squared, smallest first
+    if ev[1] <= 1e-12 * ev[2]: raise TreebookError(f"all {len(p)} points of {name} lie on one line: there is no tree to read")
     return p
 
 def _fields(line: str) -> tuple:
@@ -63,13 +70,47 @@ def _read_text(path: Path, look: int = 50) -> np.ndarray:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try: a = np.loadtxt(src, dtype=np.float64, ndmin=2, comments=("#", "//"), delimiter=d, skiprows=skip)
-        except ValueError as e:
-            raise TreebookError(f"cannot read {path} as rows of numbers ({e}); an .xyz file holds one point a line: x y z [more columns]") from None
+        except ValueError:
+            raise TreebookError(f"cannot read {path}: {_bad_line(path, skip, d, comma)}; an .xyz file holds one point a line: x y z [more columns]") from None
     return a[:, :3]
+
+def _bad_line(path: Path, skip: int, d, comma: bool) -> str:
+    "Which line of a text scan `np.loadtxt` could not read, and why, in words."
+    width = None
+    with open(path, errors="replace") as f:
+        for k, line in enumerate(f, 1):
+            s = line.strip()
+            if k <= skip or not s or s.startswith(("#", "//")): continue
+            fields = [x.replace(",", ".") if comma else x for x in (s.split(d) if d else s.split())]
+            bad = next((x for x in fields if not _is_number(x.strip())), None)
+            if bad is not None: return f"line {k} holds {bad.strip()[:20]!r}, not a number"
+            if width is None: width = len(fields)
+            elif len(fields) != width: return f"line {k} has {len(fields)} values where the lines before have {width}"
+    return "its rows of numbers do not line up"
+
+@contextmanager
+def _quiet_stderr():
+    "Silence what C libraries (RPly, libE57) print on the process's stderr: the command says what went wrong in one line."
+    fd = 2   # what C code writes to, whatever Python's sys.stderr is
+    try: sys.stderr.flush()
+    except (AttributeError, ValueError, OSError): pass
+    try: saved = os.dup(fd)
+    except OSError: yield; return   # no stderr at all: nothing to silence
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, fd)
+    try: yield
+    finally: os.dup2(saved, fd); os.close(saved); os.close(null)
+
+def _looks_like(path: Path, magic: tuple, what: str):
+    "A `TreebookError` unless the file starts with one of `magic` (random bytes say 'not a .ply file', not a parser's dump)."
+    with open(path, "rb") as f: head = f.read(64)
+    if not any(head.startswith(m) for m in magic): raise TreebookError(f"{path} is not {what} file (it does not start like one)")
 
 def _read_o3d(path: Path) -> np.ndarray:
     import open3d as o3d
-    pc = o3d.io.read_point_cloud(str(path))
+    if path.suffix.lower() == ".ply": _looks_like(path, (b"ply\n", b"ply\r\n"), "a .ply")
+    else: _looks_like(path, (b"#", b"VERSION", b"FIELDS"), "a .pcd")
+    with _quiet_stderr(): pc = o3d.io.read_point_cloud(str(path))
     return np.asarray(pc.points, dtype=np.float64).reshape(-1, 3)
 
 def _read_las(path: Path) -> np.ndarray:
@@ -82,17 +123,25 @@ def _read_e57(path: Path) -> np.ndarray:
     "All the scans of an E57 file in its common frame (each scan turned and moved by its pose), one after the other."
     try: import pye57
     except ImportError: raise TreebookError(f"reading {path.name} needs pye57: pip install pye57") from None
+    _looks_like(path, (b"ASTM-E57",), "an .e57")
     try:
-        with pye57.E57(str(path)) as f:
+        with _quiet_stderr(), pye57.E57(str(path)) as f:
             scans = [f.read_scan(i, ignore_missing_fields=True) for i in range(f.scan_count)]
-    except Exception as e: raise TreebookError(f"cannot read {path} as E57 ({type(e).__name__}: {e})") from None
+    except Exception as e:
+        why = next((ln.strip(" *") for ln in str(e).splitlines() if ln.strip(" *")), type(e).__name__)
+        raise TreebookError(f"cannot read {path} as E57: {why[:100]}") from None
     parts = [np.column_stack([s["cartesianX"], s["cartesianY"], s["cartesianZ"]]) for s in scans]
     return np.vstack(parts).astype(np.float64) if parts else np.zeros((0, 3))
 
 def _read_npy(path: Path) -> np.ndarray:
+    _looks_like(path, (b"\x93NUMPY",), "a .npy")
     try: a = np.load(path, allow_pickle=False)
-    except Exception as e: raise TreebookError(f"cannot read {path} as .npy ({type(e).__name__}: {e})") from None
+    except ValueError as e:
+        if "pickle" in str(e): raise TreebookError(f"{path} holds Python objects, not an array of numbers") from None
+        raise TreebookError(f"cannot read {path}: it is damaged or incomplete") from None
+    except Exception: raise TreebookError(f"cannot read {path}: it is damaged or incomplete") from None
     if a.ndim != 2 or a.shape[1] < 3: raise TreebookError(f"{path} holds an array of shape {a.shape}; points need shape (n, 3)")
+    if a.dtype.kind not in "biuf": raise TreebookError(f"{path} holds {'complex numbers' if a.dtype.kind == 'c' else a.dtype}; points are real x, y, z")
     return a[:, :3].astype(np.float64)
 
 def up_to_z(p: np.ndarray, up: str = "z") -> np.ndarray:

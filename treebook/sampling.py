@@ -123,7 +123,7 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
         raise TreebookError("structure-aware decoding needs the fitted tokenizer for the root cell and the smallest radius: "
                             "pass tok=..., or structure=False")
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
-    if temperature < 0: raise TreebookError(f"temperature must be >= 0, got {temperature}")
+    if not temperature >= 0 or temperature == float("inf"): raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_k is not None and top_k < 1: raise TreebookError(f"top_k must be at least 1, got {top_k}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     max_len = c.max_len if max_len is None else max_len

@@ -22,7 +22,7 @@ import torch.distributed as dist
 import torch.nn.functional as F
 from tqdm.auto import tqdm
 
-from .tree import Tree, TreebookError, _atomic_write
+from .tree import Tree, TreebookError, _atomic_write, flag_number, out_folder
 from .tokens import ORDERS, PAD, Tokenizer
 from .hourglass import ARCHS, ModelConfig, TreeTransformer
 from .datasets import load_manifest, load_trees
@@ -118,11 +118,22 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     `rank_weights` makes every process write its final weights to `rank<r>.pt` (to check that they agree)."""
     if order not in ORDERS: raise TreebookError(f"unknown order {order!r}: choose one of {', '.join(ORDERS)}")
     if arch not in ARCHS: raise TreebookError(f"unknown arch {arch!r}: choose one of {', '.join(ARCHS)}")
-    for name, v in (("batch_size", batch_size), ("epochs", epochs), ("ckpt_every", ckpt_every), ("log_every", log_every)):
-        if int(v) < 1: raise TreebookError(f"{name} must be >= 1, got {v}")
-    if steps is not None and steps < 1: raise TreebookError(f"steps must be >= 1, got {steps}")
+    for name, v, need in (("batch_size", batch_size, 1), ("epochs", epochs, 1), ("ckpt_every", ckpt_every, 1), ("log_every", log_every, 1),
+                          ("dim", dim, 1), ("depth", depth, 1), ("heads", heads, 1), ("warmup", warmup, 0), ("val_trees", val_trees, 1),
+                          ("steps", steps, 1), ("val_every", val_every, 1), ("max_train", max_train, 1), ("stop_after", stop_after, 1),
+                          ("threads", threads, 1)):
+        if v is not None and (not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < need):
+            raise TreebookError(f"{name} must be a whole number >= {need}, got {v!r}")
+    for name, v, positive in (("lr", lr, True), ("weight_decay", weight_decay, False), ("grad_clip", grad_clip or 0.0, False),
+                              ("time_limit", time_limit, True)):
+        if v is not None and not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
+            raise TreebookError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {v!r}")
     data_dir, out_dir = Path(data_dir), Path(out_dir)
     if not data_dir.is_dir(): raise TreebookError(f"data folder {data_dir} does not exist: make one with generate_dataset / treebook generate")
+    tok_path, last = out_dir / "tokenizer.json", out_dir / "last.pt"
+    out_folder(out_dir)   # checked before any work; made only when every argument is known to be good
+    if resume and not last.is_file(): raise TreebookError(f"nothing to resume in {out_dir}: it holds no last.pt; start without --resume")
+    if not resume and last.exists(): raise TreebookError(f"{out_dir} already holds a run (last.pt): pass resume=True / --resume, or another --out")
     load_manifest(data_dir)
     if threads: torch.set_num_threads(int(threads))
     rank, world = _dist_info()
@@ -132,8 +143,8 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     train_set = [t for t in train_set if t.n]
     if not train_set: raise TreebookError(f"the dataset in {data_dir} has no (non-empty) training trees")
     val_set = [t for t in val_set if t.n][:val_trees] or train_set[:min(len(train_set), val_trees)]
-    out_dir.mkdir(parents=True, exist_ok=True)
-    tok_path, last = out_dir / "tokenizer.json", out_dir / "last.pt"
+    if len(train_set) // world // batch_size < 1:
+        raise TreebookError(f"{len(train_set)} training trees make no batch of {batch_size} per process: lower batch_size")
     args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads, batch_size=batch_size,
                 world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup, weight_decay=weight_decay, grad_clip=grad_clip,
                 augment=augment_data, val_trees=len(val_set), max_train=max_train, seed=seed)
@@ -146,9 +157,9 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
             raise TreebookError(f"--resume with other settings than the run in {out_dir} (stored, given): {diff}")
         tok = Tokenizer.load(tok_path)
     else:
-        if last.exists(): raise TreebookError(f"{out_dir} already holds a run (last.pt): pass resume=True / --resume, or another --out")
         fit_on = [augment(t, seed, 10 ** 6, i) for i, t in enumerate(train_set[:2000])]
         tok = Tokenizer.fit(train_set[:2000] + fit_on)
+        out_dir.mkdir(parents=True, exist_ok=True)
         if rank == 0: tok.save(tok_path)
     max_len = max(t.n for t in train_set + val_set) * 8 + 16
     config = ModelConfig(arch=arch, dim=dim, depth=depth, heads=heads, max_len=max_len)
@@ -165,7 +176,6 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     sampler = torch.utils.data.DistributedSampler(range(len(train_set)), num_replicas=world, rank=rank, shuffle=True,
                                                   seed=seed, drop_last=True)
     per_epoch = len(sampler) // batch_size
-    if per_epoch < 1: raise TreebookError(f"{len(train_set)} training trees make no batch of {batch_size} per process: lower batch_size")
     total = steps or epochs * per_epoch
     net = model
     if world > 1: net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True)  # e.g. an empty alpha
@@ -238,6 +248,8 @@ def load_pretrained(model: str = "elm"):
     "(TreeTransformer, Tokenizer) of a shipped model by name, or of a checkpoint path with its tokenizer beside it."
     p = Path(model)
     if p.suffix == ".pt" or p.exists():
+        if p.is_dir(): raise TreebookError(f"the model {p} is a folder: give its checkpoint (.pt), e.g. {p / 'best.pt'}")
+        if not p.is_file(): raise TreebookError(f"no such model file: {p}")
         pt = p
         tok_path = next((q for q in (p.with_suffix(".tok.json"), p.parent / "tokenizer.json") if q.is_file()), None)
     else:
@@ -249,20 +261,31 @@ def load_pretrained(model: str = "elm"):
         raise TreebookError(f"no tokenizer beside {pt}: expected {Path(pt).with_suffix('.tok.json').name} or tokenizer.json")
     return TreeTransformer.load(pt), Tokenizer.load(tok_path)
 
+def _batch_seed(seed: int, k: int) -> int:
+    "The seed of batch `k` of a large sample (batch 0 keeps `seed`, so a sample that fits one batch is as before)."
+    return seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
+
 def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None, top_k: int | None = None,
-                 seed: int = 0, structure: bool = True, progress: bool = False) -> list:
-    "`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure` keeps every tree connected."
-    if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
-    if temperature < 0: raise TreebookError(f"temperature must be >= 0, got {temperature}")
+                 seed: int = 0, structure: bool = True, progress: bool = False, batch_size: int = 256) -> list:
+    """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure` keeps
+    every tree connected. They are drawn `batch_size` at a time, so memory stays bounded however large `n` is."""
+    if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
+    if not (math.isfinite(temperature) and temperature >= 0): raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
+    if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
     net, tok = load_pretrained(model) if isinstance(model, (str, Path)) else model
     from treebook.sampling import sample
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # one token at a time is many tiny operations: one thread is faster, and much faster on a busy machine
-    try: seqs = sample(net, n, tok=tok, temperature=temperature, top_k=top_k, top_p=top_p, structure=structure,
-                       min_len=24, seed=seed, progress=progress)
-    finally: torch.set_num_threads(threads)
-    return [tok.decode(s) for s in seqs]
+    trees, starts = [], range(0, n, batch_size)
+    bar = tqdm(total=n, desc="trees", unit="tree", disable=not progress or len(starts) == 1)
+    try:
+        for k, i in enumerate(starts):
+            seqs = sample(net, min(batch_size, n - i), tok=tok, temperature=temperature, top_k=top_k, top_p=top_p,
+                          structure=structure, min_len=24, seed=_batch_seed(seed, k), progress=progress and len(starts) == 1)
+            trees += [tok.decode(s) for s in seqs]; bar.update(len(seqs))
+    finally: torch.set_num_threads(threads); bar.close()
+    return trees
 
 def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
     "Sample `n` trees from the shipped elm model into `out_dir`: .npz and .obj each, and one PNG grid; returns the paths."
@@ -283,10 +306,13 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
     p = parser_class(prog="treebook train", description="Train a TreeTransformer on a dataset folder (under torchrun: one process per rank).")
     p.add_argument("--data", required=True); p.add_argument("--out", required=True)
     p.add_argument("--order", default="dfs", choices=ORDERS); p.add_argument("--arch", default="full", choices=ARCHS)
-    for name, typ, default in (("dim", int, 128), ("depth", int, 8), ("heads", int, 4), ("batch-size", int, 8), ("epochs", int, 1),
-                               ("steps", int, None), ("lr", float, 2e-3), ("warmup", int, 100), ("grad-clip", float, 1.0),
-                               ("val-every", int, None), ("val-trees", int, 256), ("ckpt-every", int, 50), ("max-train", int, None),
-                               ("stop-after", int, None), ("time-limit", float, None), ("threads", int, None), ("seed", int, 0)):
+    whole, positive = lambda lo=1, hi=None: flag_number(int, lo, hi), flag_number(float, above=0)
+    for name, typ, default in (("dim", whole(1, 4096), 128), ("depth", whole(1, 256), 8), ("heads", whole(1, 256), 4),
+                               ("batch-size", whole(), 8), ("epochs", whole(), 1), ("steps", whole(), None), ("lr", positive, 2e-3),
+                               ("warmup", whole(0), 100), ("grad-clip", flag_number(float, 0), 1.0), ("val-every", whole(), None),
+                               ("val-trees", whole(), 256), ("ckpt-every", whole(), 50), ("max-train", whole(), None),
+                               ("stop-after", whole(), None), ("time-limit", positive, None), ("threads", whole(1, 1024), None),
+                               ("seed", whole(0, 2 ** 32 - 1), 0)):
         p.add_argument(f"--{name}", type=typ, default=default)
     p.add_argument("--no-augment", action="store_true"); p.add_argument("--resume", action="store_true")
     p.add_argument("--quiet", action="store_true"); p.add_argument("--rank-weights", action="store_true")

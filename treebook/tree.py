@@ -20,8 +20,8 @@ import numpy as np
 # %% auto #0
 __all__ = ['FORMAT_VERSION', 'TreebookError', 'Tree', 'children', 'depth', 'order', 'take', 'reorder', 'subtree', 'prefix',
            'from_segments', 'with_origin', 'translate', 'scale', 'rotate_z', 'mirror', 'too_far', 'origin_for', 'Frame',
-           'normalize', 'all_or_nothing', 'save', 'read_json', 'load', 'flag_number', 'info', 'with_pipe_radii',
-           'example_tree']
+           'normalize', 'all_or_nothing', 'can_write_in', 'out_folder', 'save', 'read_json', 'load', 'flag_number',
+           'info', 'with_pipe_radii', 'example_tree']
 
 # %% ../nbs/00_tree.ipynb #6a559f51
 class TreebookError(ValueError):
@@ -34,11 +34,12 @@ _RESERVED = _CORE + ("format_version", "format", "origin")
 # %% ../nbs/00_tree.ipynb #8d102840
 def _points(a, name, dtype=np.float32) -> np.ndarray:
     "`a` as a float32 (n, 4) array (or `dtype`), or a `TreebookError` naming `name`."
-    if np.asarray(a).dtype.kind == "c": raise TreebookError(f"`{name}` holds complex numbers; positions and radii are real")
     try:
-        with np.errstate(over="ignore"): a = np.array(a, dtype=dtype)   # too large for float32: infinity, refused below
+        complex_ = np.asarray(a).dtype.kind == "c"
+        with np.errstate(over="ignore"): a = None if complex_ else np.array(a, dtype=dtype)   # too large for float32: infinity, refused below
     except (TypeError, ValueError, OverflowError) as e:
         raise TreebookError(f"`{name}` must be numbers, four a row (x, y, z, radius): {str(e).split(chr(10))[0][:80]}") from None
+    if complex_: raise TreebookError(f"`{name}` holds complex numbers; positions and radii are real")
     if a.ndim != 2 or a.shape[1] != 4:
         raise TreebookError(f"`{name}` must have shape (n, 4) for x, y, z, radius; got shape {a.shape}")
     return a
@@ -80,7 +81,7 @@ def _check_topology(parent):
 def _origin(o) -> np.ndarray:
     "`o` as three finite float64 numbers (None: the world's origin), or a `TreebookError`."
     if o is None: return np.zeros(3)
-    try: a = np.array(o, dtype=np.float64).reshape(-1)
+    try: a = None if np.asarray(o).dtype.kind == "c" else np.array(o, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError): a = None
     if a is None or a.shape != (3,) or not np.isfinite(a).all():
         raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {str(o.tolist() if isinstance(o, np.ndarray) else o)[:60]}")
@@ -432,6 +433,23 @@ def all_or_nothing(folders=()):
             for t, _ in done[k:]: Path(t).unlink(missing_ok=True)
             raise TreebookError(f"cannot write {path}: {_os_reason(e, path.parent)}") from None
 
+def can_write_in(folder: Path, target: Path):
+    "Make and remove a file in `folder`: a full disk, a read-only one or a folder that takes no files says so now."
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".treebook-check-")
+        os.close(fd); os.unlink(tmp)
+    except OSError as e:
+        raise TreebookError(f"cannot write {target}: {_os_reason(e, Path(folder))}") from None
+
+def out_folder(path: str) -> tuple:
+    "Check, before any work, that the output folder `path` can be made and written: (folder, the folders to make)."
+    p = Path(path)
+    made, q = [], p
+    while not q.exists() and q != q.parent: made.append(q); q = q.parent
+    if not q.is_dir(): raise TreebookError(f"cannot write into {p}: {q} is a file, not a folder")
+    can_write_in(q, p)
+    return p, made
+
 def save(self: Tree, path) -> Path:
     "Write the tree to `path` (.npz or .json), atomically."
     path = Path(path)
@@ -463,7 +481,8 @@ def read_json(path, fmt: str, newest: int, what: str, version_key: str = "format
     if not path.is_file(): raise TreebookError(f"no such file: {path}" if not path.is_dir() else f"{path} is a folder, not a {what} file")
     try: d = json.loads(path.read_text(), parse_constant=_not_json)
     except TreebookError as e: raise TreebookError(f"{path} {e} (NaN and infinity are not allowed)") from None
-    except (ValueError, UnicodeDecodeError, RecursionError) as e:
+    except UnicodeDecodeError: raise TreebookError(f"{path} is not a treebook {what} file (it is not JSON text){hint}") from None
+    except (ValueError, RecursionError) as e:
         raise TreebookError(f"cannot read {path} as JSON: {str(e).splitlines()[0][:100]}") from None
     except OSError as e: raise TreebookError(f"cannot read {path}: {(e.strerror or str(e)).lower()}") from None
     if not isinstance(d, dict) or d.get("format") != fmt: raise TreebookError(f"{path} is not a treebook {what} file{hint}")

@@ -182,6 +182,7 @@ def dyad(coeffs: pywt.FswavedecnResult, j: int) -> np.ndarray:
 
 def compression(occ, coeffs=None, v: float = 0.2) -> dict:
     "Paper Table 1: share of zero coefficients (lossless), share below `v` (lossy; pywt's orthonormal Haar) and the lossy IoU."
+    if not (np.isfinite(v) and v >= 0): raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
     occ = np.asarray(occ, bool)
     coeffs = transform(occ) if coeffs is None else coeffs
     c = coeffs.coeffs
@@ -369,6 +370,7 @@ def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, thresh
 def infer_grammar(scan, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False, v: float = 0.2,
                   threshold: float = 0.3, axiom_level=None, compress: bool = True) -> Grammar:
     "Grammar of a scan (path or (n, 3) points); `grammar.meta` holds the compression row and the timings of each stage."
+    if not (np.isfinite(v) and v >= 0): raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
     return _infer(scan, grid, up, scanner, symmetrize, v, threshold, axiom_level, compress)[0]
 
 def compression_header() -> str:
