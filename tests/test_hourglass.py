@@ -7,7 +7,7 @@ import torch
 from hypothesis import given, settings, strategies as st
 
 from treebook.hourglass import (ARCHS, DecodeState, ModelConfig, TreeTransformer, check_cache, check_causal,
-                                shorten, upsample)
+                                shorten, lengthen)
 from treebook.sampling import CONTRACT, TreeGrammar, pick, sample, token_connectivity
 from treebook.tree import TreebookError
 
@@ -56,7 +56,7 @@ def test_pooling_groups():
     pos = torch.arange(16.).view(1, 16, 1)
     assert shorten(pos, 4).flatten().tolist() == [0.0, 2.5, 6.5, 10.5]
     # branch b = mean of points 2b-1, 2b: it has seen tokens up to 8b and serves positions 8b..8b+7
-    assert upsample(shorten(shorten(pos, 4), 2), 8).flatten().tolist() == [0.0] * 8 + [4.5] * 8
+    assert lengthen(shorten(shorten(pos, 4), 2), 8).flatten().tolist() == [0.0] * 8 + [4.5] * 8
 
 
 @pytest.mark.parametrize("arch", ARCHS)

@@ -17,8 +17,8 @@ from pathlib import Path
 from .tree import _atomic_write
 
 # %% auto #0
-__all__ = ['SPECIES', 'Species', 'check_species', 'sample_markers', 'species', 'grow', 'grow_tree', 'stage_tree', 'tree_stats',
-           'species_gallery', 'demo_gallery']
+__all__ = ['SPECIES', 'grow', 'Species', 'check_species', 'sample_markers', 'species', 'grow_stages', 'grow_tree', 'stage_tree',
+           'tree_stats', 'species_gallery', 'demo_gallery']
 
 # %% ../nbs/02_botany.ipynb #2a97e56c
 @dataclass(frozen=True)
@@ -532,7 +532,7 @@ def species(name) -> Species:
     return SPECIES[name]
 
 # %% ../nbs/02_botany.ipynb #d2f9a612
-def grow(sp, seed: int = 0, stages: int = 10, max_branches: int | None = None, canonical: bool = True) -> list:
+def grow_stages(sp, seed: int = 0, stages: int = 10, max_branches: int | None = None, canonical: bool = True) -> list:
     """The growth history of one tree as `stages` Trees; each contains the one before at the same place; per-branch
     `stage` of birth."""
     sp = species(sp)
@@ -560,16 +560,19 @@ def grow(sp, seed: int = 0, stages: int = 10, max_branches: int | None = None, c
         out = [frame.apply(t) for t in out]
     return out
 
+# %% ../nbs/02_botany.ipynb #81453af2
+grow = grow_stages  # the old name, used across the book; `lsystem.grow` grows a grammar
+
 # %% ../nbs/02_botany.ipynb #168ed615
 def grow_tree(sp, seed: int = 0, max_branches: int | None = None) -> Tree:
-    "One full-grown tree (the last stage of `grow`)."
-    return grow(sp, seed, stages=1, max_branches=max_branches)[0]
+    "One full-grown tree (the last stage of `grow_stages`)."
+    return grow_stages(sp, seed, stages=1, max_branches=max_branches)[0]
 
 # %% ../nbs/02_botany.ipynb #9e0d4a63
 def stage_tree(tree: Tree, k: int, exponent: float = 2.5) -> Tree:
     "The tree at stage `k` from a final grown tree (its per-branch `stage`), with its pipe-model radii at that stage."
     if "stage" not in tree.attrs:
-        raise TreebookError("stage_tree needs a tree with a per-branch `stage` array (as grown by `grow`)")
+        raise TreebookError("stage_tree needs a tree with a per-branch `stage` array (as grown by `grow_stages`)")
     n = int(np.searchsorted(tree.stage, k, side="right"))
     if n == 0: raise TreebookError(f"no branch is born by stage {k}; stages start at {int(tree.stage.min())}")
     tip = float(tree.end[tree.leaves, 3].min())

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .tree import Tree, TreebookError, _atomic_write
-from .botany import Species, grow, check_species
+from .botany import Species, grow_stages, check_species
 from .botany import species as _species
 
 # %% auto #0
@@ -41,7 +41,7 @@ def _make_shard(job: dict) -> dict:
     sp = Species(**job["params"])
     trees, out = [], {}
     for i, s in zip(job["index"], job["seeds"]):
-        t = grow(sp, seed=s, stages=job["stages"], max_branches=job["max_branches"])[-1]
+        t = grow_stages(sp, seed=s, stages=job["stages"], max_branches=job["max_branches"])[-1]
         trees.append(t)
         if job["trees"]: t.save(Path(job["tree_dir"]) / f"tree_{i:05d}.npz")
     cat = lambda k: np.concatenate([getattr(t, k) for t in trees])

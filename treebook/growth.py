@@ -23,9 +23,10 @@ from .hourglass import DecodeState, ModelConfig, TreeTransformer
 from .sampling import TreeGrammar, pick, pick_block
 
 # %% auto #0
-__all__ = ['GROWTH_MODES', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar', 'wrap_embed',
-           'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss', 'extend_context',
-           'grow_sequence', 'stage_picture', 'write_growth', 'complete', 'tree_picture', 'write_trees', 'demo_growth']
+__all__ = ['GROWTH_MODES', 'write_trees', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar',
+           'wrap_embed', 'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss',
+           'extend_context', 'grow_sequence', 'stage_picture', 'write_growth', 'complete', 'tree_picture',
+           'write_tree_set', 'demo_growth']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -542,7 +543,7 @@ def tree_picture(tree: Tree, size: int = 256):
     return Image.fromarray(img)
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #99d59522
-def write_trees(trees, out_dir, stem: str = "tree", meshes: bool = True, first=None, size: int = 256) -> list:
+def write_tree_set(trees, out_dir, stem: str = "tree", meshes: bool = True, first=None, size: int = 256) -> list:
     """Write `stem_XX.npz` (+ .obj) for each tree and `stem.png` (the tree `first`, e.g. the partial tree, leading);
     returns the paths."""
     from treebook.render import image_grid
@@ -565,20 +566,11 @@ def write_trees(trees, out_dir, stem: str = "tree", meshes: bool = True, first=N
         paths.append(_atomic_write(out / f"{stem}.png", lambda f: grid.save(f, format="png")))
     return paths
 
-# %% ../nbs/10_growth_and_conditioning.ipynb #a10f5692
+# %% ../nbs/10_growth_and_conditioning.ipynb #19ec39a5
+write_trees = write_tree_set  # the old name (the CLI imports it); `cli.write_trees` writes one file per tree
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #5b1d55c0
 def demo_growth(out_dir, seed: int = 0) -> list:
-    """Growth filmstrip + GIF (elm-grow, else procedural) and, if shipped, one image-to-tree picture into `out_dir`;
-    returns the paths."""
-    from treebook.train import WEIGHTS
-    out = Path(out_dir)
-    try: out.mkdir(parents=True, exist_ok=True)
-    except OSError as e: raise TreebookError(f"cannot create the folder {out}: {e}") from None
-    if (WEIGHTS / "elm-grow.pt").is_file(): stages, sub = grow_sequence("elm-grow", seed=seed), "growth_elm-grow"
-    else:
-        from treebook.botany import grow
-        stages, sub = grow("elm", seed=seed), "growth_procedural"
-    paths = write_growth(stages, out / sub, meshes=False)
-    if (WEIGHTS / "elm-image.pt").is_file():
-        from treebook.condition import demo_image_to_tree
-        paths += demo_image_to_tree(out, seed=seed)
-    return paths
+    "`demos.demo_growth`, under its old name (the CLI loads it from here)."
+    from treebook.demos import demo_growth as demo
+    return demo(out_dir, seed)

@@ -18,7 +18,7 @@ from fastcore.basics import patch
 from .tree import TreebookError, _atomic_write
 
 # %% auto #0
-__all__ = ['ARCHS', 'CHECKPOINT_VERSION', 'PAD_TOKEN', 'ModelConfig', 'KVCache', 'Attention', 'Block', 'shorten', 'upsample',
+__all__ = ['ARCHS', 'CHECKPOINT_VERSION', 'PAD_TOKEN', 'ModelConfig', 'KVCache', 'Attention', 'Block', 'shorten', 'lengthen',
            'TreeTransformer', 'check_causal', 'DecodeState', 'check_cache']
 
 # %% ../nbs/04_hourglass.ipynb #57f6722c
@@ -126,7 +126,7 @@ def shorten(x, k: int):
     return x.view(B, L // k, k, C).mean(2)
 
 # %% ../nbs/04_hourglass.ipynb #34f2ecd4
-def upsample(x, k: int):
+def lengthen(x, k: int):
     "Duplicate each vector of `x` (B, L/k, C) `k` times."
     return x.repeat_interleave(k, dim=1)
 
@@ -182,7 +182,7 @@ class TreeTransformer(nn.Module):
             x = shorten(x, k)
         x = self.bottleneck(x)
         for blk, k, s in zip(self.up[::-1], self.config.factors[::-1], skips[::-1]):
-            x = blk(upsample(x, k) + s)
+            x = blk(lengthen(x, k) + s)
         return self.head(self.ln_f(x[:, :L]))
 
     @property

@@ -12,8 +12,8 @@ from scipy.spatial import cKDTree
 from .tree import Tree, TreebookError
 
 # %% auto #0
-__all__ = ['POINTNET_VERSION', 'POINTNET_POINTS', 'sample_surface', 'normalize_cloud', 'tree_clouds', 'chamfer', 'cd_estimates',
-           'nearest', 'jsd', 'evaluate', 'connect_rate', 'SpeciesPointNet', 'train_species_pointnet',
+__all__ = ['chamfer', 'POINTNET_VERSION', 'POINTNET_POINTS', 'sample_surface', 'normalize_cloud', 'tree_clouds', 'cloud_chamfer',
+           'cd_estimates', 'nearest', 'jsd', 'evaluate', 'connect_rate', 'SpeciesPointNet', 'train_species_pointnet',
            'save_species_pointnet', 'load_species_pointnet', 'pointnet_features', 'frechet_distance', 'fpd']
 
 # %% ../nbs/06_metrics.ipynb #aee8867e
@@ -63,7 +63,7 @@ def tree_clouds(trees, n: int = 2048, seed: int = 0, progress: bool = True) -> n
     return out
 
 # %% ../nbs/06_metrics.ipynb #1eff0282
-def chamfer(
+def cloud_chamfer(
     a, b, tree_a: cKDTree | None = None, tree_b: cKDTree | None = None, bound: float = np.inf, chunk: int = 512
 ) -> float:
     """Chamfer distance: mean squared nearest distance from a to b, plus from b to a; stops early (returning a value >=
@@ -75,6 +75,9 @@ def chamfer(
             total += float((d ** 2).sum()) / n
             if total >= bound: return total  # every term is >= 0: the distance can only grow
     return total
+
+# %% ../nbs/06_metrics.ipynb #27a8c8e9
+chamfer = cloud_chamfer  # the old name (chapter 10a uses it); `lsystem.chamfer` compares trees
 
 # %% ../nbs/06_metrics.ipynb #1ff67107
 def _grid_nodes(g):
@@ -143,7 +146,7 @@ def nearest(X, Y, k: int = 10, exclude_self: bool = False, grid: int = 33, est=N
             key = (i, int(j))
             if key in cache: d = cache[key]
             else:
-                d = chamfer(X[i], Y[j], kx[i], ky[j], bound=best)
+                d = cloud_chamfer(X[i], Y[j], kx[i], ky[j], bound=best)
                 if d < best: cache[key] = d  # only complete (exact) values are cached
             if d < best: best, arg = d, int(j)
         else:

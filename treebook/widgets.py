@@ -114,11 +114,11 @@ class GrowthExplorer:
 
     def regrow(self):
         "Grow the history for the current source and seed, then show the current stage."
-        from treebook.botany import grow
+        from treebook.botany import grow_stages
         from treebook.growth import grow_sequence
         src = self.sources[self.source.value]
         if isinstance(src, tuple) and len(src) == 2 and src[0] == "species":
-            self.history = grow(src[1], seed=int(self.seed.value))
+            self.history = grow_stages(src[1], seed=int(self.seed.value))
         else:
             self.history = grow_sequence(src, seed=int(self.seed.value), **self.sampling)
         self.redraw()
