@@ -384,7 +384,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", required=True, help="tree file (.npz or .json)")
     s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply)")
     s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges)")
-    s.add_argument("--method", default="partnet", choices=["partnet", "classic"], help="neural decomposition or the geodesic baseline (default: partnet)")
+    s.add_argument("--method", default="paths", choices=["paths", "partnet", "classic"],
+                   help="paths through the points (default), the neural decomposition, or geodesic level sets")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
     s.add_argument("--foliage", action="store_true", help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
     s.add_argument("--radii", default="measured", choices=["measured", "pipe"],

@@ -20,8 +20,8 @@ from .pointio import read_points
 # %% auto #0
 __all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
            'neighbour_graph', 'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage',
-           'point_labels', 'pipe_radii', 'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct',
-           'demo_trees']
+           'point_labels', 'pipe_radii', 'entry_nodes', 'branch_paths', 'path_skeleton', 'segment_radii', 'find_trees',
+           'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -392,6 +392,156 @@ def pipe_radii(tree: Tree, exponent: float = 2.5, trunk: int = 5) -> Tree:
     start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
     return Tree(start, end, par, check=False, origin=tree.origin, **tree.attrs)
 
+# %% ../nbs/09b_reconstruct.ipynb #e6e6c891
+def entry_nodes(b, geo, pred, g) -> np.ndarray:
+    """Node (n,) of each point of the neighbour graph `g`, given its geodesic bin `b`, distance `geo` and shortest-path
+    predecessor `pred` from the root: the pieces of a bin that the graph joins, but only between points that entered
+    the bin from the same node below. Two branches that touch keep their nodes apart; a ring of one branch stays one."""
+    n = len(b)
+    order = np.argsort(geo, kind="stable")
+    node, entry = np.full(n, -1), np.full(n, -1)
+    gc = g.tocoo()
+    inside = b[gc.row] == b[gc.col]
+    r, c = gc.row[inside], gc.col[inside]
+    eo = np.argsort(b[r], kind="stable"); r, c = r[eo], c[eo]
+    bins, starts = np.unique(b[order], return_index=True)
+    ends = np.r_[starts[1:], n]
+    lo, hi = np.searchsorted(b[r], bins), np.searchsorted(b[r], bins, side="right")
+    loc, nxt = np.full(n, -1), 0
+    for bi, s, e, a0, a1 in zip(bins, starts, ends, lo, hi):
+        pts = order[s:e]
+        for i in pts:  # in geodesic order, so a predecessor in the same bin already has its entry
+            p = pred[i]
+            entry[i] = -1 if p < 0 else (node[p] if b[p] < bi else entry[p])
+        rr, cc = r[a0:a1], c[a0:a1]
+        ok = entry[rr] == entry[cc]
+        loc[pts] = np.arange(len(pts))
+        lab = connected_components(coo_matrix((np.ones(ok.sum()), (loc[rr[ok]], loc[cc[ok]])), shape=(len(pts),) * 2),
+                                   directed=False)[1]
+        node[pts] = nxt + lab
+        nxt += lab.max() + 1
+    return node
+
+# %% ../nbs/09b_reconstruct.ipynb #6448e549
+def branch_paths(par, geo) -> tuple:
+    """(paths, parent path of each) of a tree of nodes with parents `par` and geodesic distances `geo`: from each root
+    the path follows the child that reaches farthest, and every other child starts a path of its own."""
+    m = len(par)
+    order = np.argsort(geo, kind="stable")
+    reach = np.asarray(geo, np.float64).copy()
+    for i in order[::-1]:
+        p = par[i]
+        if p >= 0 and reach[i] > reach[p]: reach[p] = reach[i]
+    heavy, kids = np.full(m, -1), [[] for _ in range(m)]
+    for i in order:
+        p = par[i]
+        if p >= 0:
+            kids[p].append(i)
+            if heavy[p] < 0 or reach[i] > reach[heavy[p]]: heavy[p] = i
+    paths, parent_path = [], []
+    stack = [(r, -1) for r in order[::-1] if par[r] < 0]
+    while stack:
+        s, pp = stack.pop()
+        path = [s]
+        while heavy[path[-1]] >= 0: path.append(heavy[path[-1]])
+        paths.append(np.array(path)); parent_path.append(pp)
+        stack += [(c, len(paths) - 1) for v in path[::-1] for c in kids[v] if c != heavy[v]]
+    return paths, np.array(parent_path, np.int64)
+
+# %% ../nbs/09b_reconstruct.ipynb #cef271e9
+def path_skeleton(points, k: int = 10, bin_spacings: float = 1.0, twig: float = 2.0, step: float = 3.0,
+                  apart: float = 1.0, apart_diag: float = 0.004, twig_diag: float = 0.005) -> Tree:
+    """A connected skeleton `Tree` (radii not yet measured) of points (n, 3), z up, made of paths through the points:
+    nodes from `entry_nodes` on bins `bin_spacings` point spacings wide; `branch_paths` of the node tree; a path is
+    kept from where it leaves its parent by more than `apart` spacings, `apart_diag` of the diagonal and twice the
+    parent's spread, and as far from the paths already kept on that parent (nearer, it is one of them seen again) if it then runs, and ends, `twig` spacings and `twig_diag` of the diagonal away; a vertex every `step` spacings of its path, and at forks."""
+    q = np.asarray(points, np.float64)
+    for name, v in (("bin_spacings", bin_spacings), ("twig", twig), ("step", step), ("apart", apart)):
+        if not (isinstance(v, (int, float, np.integer, np.floating)) and 0 < v < 1000):
+            raise TreebookError(f"{name} must be a number of point spacings in (0, 1000), got {v!r}")
+    g, idx, root = neighbour_graph(q, k)
+    q = q[idx]
+    spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1]))
+    geo, pred = dijkstra(g, indices=root, return_predecessors=True)
+    node = np.unique(entry_nodes(np.floor(geo / (bin_spacings * spacing)).astype(np.int64), geo, pred, g),
+                     return_inverse=True)[1]
+    m = node.max() + 1
+    cnt = np.bincount(node, minlength=m)
+    cen = np.stack([np.bincount(node, q[:, d], m) for d in range(3)], 1) / cnt[:, None]
+    first = np.full(m, -1); o = np.argsort(-geo); first[node[o]] = o   # the nearest point to the root of each node
+    par = np.where(pred[first] >= 0, node[np.maximum(pred[first], 0)], -1)
+    gn = np.bincount(node, geo, m) / cnt
+    thick = np.sqrt(np.bincount(node, ((q - cen[node]) ** 2).sum(1), m) / cnt)   # a node's spread about its centre
+    paths, pp_of = branch_paths(par, gn)
+    diag = _diag(q)
+    near = max(apart * spacing, apart_diag * diag)
+    kept, attach, sibs = [None] * len(paths), [None] * len(paths), {}
+    for i, p in enumerate(paths):
+        pp = pp_of[i]
+        while pp >= 0 and kept[pp] is None: pp = pp_of[pp]   # the parent path was dropped: hang on its own parent
+        if pp >= 0:
+            beside = np.concatenate([kept[pp]] + sibs.get(pp, []))   # its parent, and its parent's paths so far
+            kd = cKDTree(cen[beside])
+            d, j = kd.query(cen[p])
+            out = np.flatnonzero(d > np.maximum(near, 2 * thick[beside[j]]))   # beyond the points of those
+            if not len(out): continue                        # it runs along its parent all the way
+            p = p[out[0]:]
+            far = max(twig * spacing, twig_diag * diag)
+            if gn[p[-1]] - gn[p[0]] < far or d[-1] < far: continue   # too short, or back beside its parent at the tip
+            attach[i] = int(kept[pp][cKDTree(cen[kept[pp]]).query(cen[p[0]])[1]])
+            sibs.setdefault(pp, []).append(p)
+        elif i > 0: continue                                 # one root: the first path's
+        kept[i] = p
+    forks = {a for a in attach if a is not None}
+    start, end, parent, seg_end = [], [], [], {}
+    for i, p in enumerate(kept):
+        if p is None: continue
+        if attach[i] is None: prev, ps = np.array([cen[p[0], 0], cen[p[0], 1], q[:, 2].min()]), -1
+        else: prev, ps = cen[attach[i]], seg_end[attach[i]]
+        last = -np.inf
+        for j, v in enumerate(p):
+            if not (j in (0, len(p) - 1) or v in forks or gn[v] - last >= step * spacing): continue
+            last = gn[v]
+            if np.linalg.norm(cen[v] - prev) <= 1e-9 * (1 + np.abs(prev).max()): seg_end[v] = ps; continue
+            start.append(prev); end.append(cen[v]); parent.append(ps)
+            ps, prev = len(start) - 1, cen[v]; seg_end[v] = ps
+    if not start: raise TreebookError(f"the {len(q)} points make no skeleton: is this a tree scan?")
+    z = np.zeros((len(start), 1))
+    return Tree(np.hstack([start, z]).astype(np.float32), np.hstack([end, z]).astype(np.float32), np.array(parent), check=False)
+
+# %% ../nbs/09b_reconstruct.ipynb #c3d66d4c
+def segment_radii(tree: Tree, points, min_points: int = 3, return_segment: bool = False):
+    """`tree` with radii measured from `points`: each point goes to its nearest segment, a segment's radius is the median
+    distance of its points to its axis (robust to the odd stray point), one with fewer than `min_points` takes its
+    parent's, and no segment is thicker than 1.05 times its parent (a tree tapers). With `return_segment`, also the
+    segment of each point."""
+    if not isinstance(tree, Tree) or not tree.n: raise TreebookError("segment_radii needs a non-empty Tree")
+    q = np.asarray(points, np.float64)
+    s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
+    spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1])) if len(q) > 1 else _diag(s)
+    L = np.linalg.norm(e - s, axis=1)
+    k = np.maximum(1, np.ceil(L / max(0.5 * spacing, 1e-12)).astype(int))
+    own = np.repeat(np.arange(tree.n), k + 1)
+    t = np.concatenate([np.linspace(0, 1, x + 1) for x in k])
+    seg = own[cKDTree(s[own] + t[:, None] * (e - s)[own]).query(q)[1]]
+    d = e[seg] - s[seg]
+    u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
+    dist = np.linalg.norm(q - s[seg] - u[:, None] * d, axis=1)
+    cnt = np.bincount(seg, minlength=tree.n)
+    o = np.argsort(seg, kind="stable")
+    r = np.array([np.median(x) if len(x) >= min_points else np.nan for x in np.split(dist[o], np.cumsum(cnt)[:-1])])
+    par = tree.parent
+    for i in range(tree.n):  # parents come first
+        p = par[i]
+        if not np.isfinite(r[i]): r[i] = r[p] if p >= 0 else (np.nanmedian(r) if np.isfinite(r).any() else spacing)
+        if p >= 0: r[i] = min(r[i], 1.05 * r[p])
+    r = np.maximum(r, 0.25 * spacing)
+    start, end = tree.start.copy(), tree.end.copy()
+    end[:, 3] = r
+    start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
+    out = Tree(start, end, par, check=False, origin=tree.origin, **tree.attrs)
+    return (out, seg) if return_segment else out
+
 # %% ../nbs/09b_reconstruct.ipynb #bf5e704b
 def find_trees(points, band: float = 0.05, min_share: float = 0.1, min_height: float = 0.6, min_rise: float = 0.7, min_gap: float = 0.1,
                k: int = 10) -> np.ndarray:
@@ -451,13 +601,20 @@ def wood_mask(points, foliage=True, weights=None, seed: int = 0) -> np.ndarray:
     if how == "geometric": return wood_points(points)
     return wood_probability(load_foliage(weights), points, seed=seed) >= 0.5
 
-METHODS = ("partnet", "classic")
+METHODS = ("paths", "partnet", "classic")
 TREES = ("joined", "largest", "all")
 RADII = ("measured", "pipe")
 
 def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_info, t0):
     "The tree of the prepared points `p` (and with `return_info` its dict, see `reconstruct`)."
     labels, seg = None, None
+    if method == "paths":
+        tree, segment_of = segment_radii(path_skeleton(p), p, return_segment=True)
+        if radii == "pipe": tree = pipe_radii(tree)
+        if not return_info: return tree
+        full = point_labels(raw, p, segment_of, radius=3 * float(np.median(cKDTree(p).query(p, 2)[0][:, 1])))
+        return tree, dict(points=p, segment=segment_of, labels_full=full, hermite_joins=0, segmentation=None,
+                          seconds=time.perf_counter() - t0)
     if method == "partnet":
         from treebook.partnet import load_partnet, segment
         seg = segment(load_partnet(weights), p, seed=seed)  # merged as the weights' config says: linkage, threshold, test-time turns
@@ -475,7 +632,7 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_in
     full = point_labels(raw, p, segment_of, radius=3 * spacing)
     return tree, dict(points=p, segment=segment_of, labels_full=full, hermite_joins=joins, segmentation=seg, seconds=time.perf_counter() - t0)
 
-def reconstruct(points, method: str = "partnet", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
+def reconstruct(points, method: str = "paths", up: str = "z", foliage=False, seed: int = 0, bin_size: float | None = None,
                 max_points: int = 60_000, ground: bool = True, weights=None, hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
                 foliage_weights=None, trees: str = "joined", radii: str = "measured"):
     """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units (about an `origin`
