@@ -172,6 +172,13 @@ def productions(coarse: Tree, fine: Tree, h: float, k: int = 6) -> dict:
 # %% ../nbs/08a_lsystem.ipynb #076dcf96
 GRAMMAR_VERSION = 2   # 2: child links, parent straightness, axiom topology
 
+def _json_safe(x):
+    "`x` (dicts, lists, numbers) with every NaN or infinity as None, which JSON can hold."
+    if isinstance(x, dict): return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)): return [_json_safe(v) for v in x]
+    if isinstance(x, float) and not np.isfinite(x): return None
+    return x
+
 def _turns(v) -> tuple:
     "(yaw, pitch) in degrees turning heading (1, 0, 0) of a local frame to direction v."
     yaw = np.degrees(np.arctan2(v[1], v[0])); pitch = np.degrees(np.arctan2(v[2], np.hypot(v[0], v[1])))
@@ -251,7 +258,7 @@ class Grammar:
         "Write the grammar as JSON (atomically); the first 50 productions are also written in turtle notation."
         path = Path(path)
         if path.suffix.lower() != ".json": raise TreebookError(f"a grammar is saved as .json, got {path.name!r}")
-        text = json.dumps(self.to_dict())
+        text = json.dumps(_json_safe(self.to_dict()), allow_nan=False)   # NaN (no trunk radius) as null: JSON has no NaN
         return _atomic_write(path, lambda f: f.write(text.encode()))
 
     @classmethod
@@ -265,7 +272,7 @@ class Grammar:
                     axiom_end=np.array(d["axiom_end"], float).reshape(-1, 3), rule_level=np.array(r["level"], np.int64),
                     heading=np.array(r["heading"], float).reshape(-1, 3), length=np.array(r["length"], float),
                     ptr=np.array(r["ptr"], np.int64), offset=np.array(r["offset"], float).reshape(-1, 3),
-                    vector=np.array(r["vector"], float).reshape(-1, 3), trunk_radius=float(d.get("trunk_radius", "nan")), meta=d.get("meta", {}),
+                    vector=np.array(r["vector"], float).reshape(-1, 3), trunk_radius=float("nan") if d.get("trunk_radius") is None else float(d["trunk_radius"]), meta=d.get("meta", {}),
                     link=np.array(r["link"], np.int64) if "link" in r else None, rel=np.array(r["rel"], float) if "rel" in r else None,
                     axiom_parent=np.array(d["axiom_parent"], np.int64) if d.get("axiom_parent") is not None else None)
         except (KeyError, TypeError, ValueError) as e: raise TreebookError(f"{path} is not a complete grammar ({type(e).__name__}: {e})") from None
