@@ -72,7 +72,7 @@ def test_bad_input(data, tmp_path):
     with pytest.raises(TreebookError, match="no dataset"): train(tmp_path / "empty", tmp_path / "o", **TINY)
     with pytest.raises(TreebookError, match="unknown order"): train(data, tmp_path / "o", order="spiral", **TINY)
     with pytest.raises(TreebookError, match="unknown arch"): train(data, tmp_path / "o", arch="big", **TINY)
-    with pytest.raises(TreebookError, match="does not exist"): train(data, tmp_path / "fresh", resume=True, **TINY)
+    with pytest.raises(TreebookError, match="nothing to resume"): train(data, tmp_path / "fresh", resume=True, **TINY)
     train(data, tmp_path / "run", stop_after=2, **TINY)
     with pytest.raises(TreebookError, match="already holds a run"): train(data, tmp_path / "run", **TINY)
     with pytest.raises(TreebookError, match="other settings"): train(data, tmp_path / "run", resume=True, **{**TINY, "dim": 64, "heads": 2})
