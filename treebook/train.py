@@ -132,7 +132,7 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     if not data_dir.is_dir(): raise TreebookError(f"data folder {data_dir} does not exist: make one with generate_dataset / treebook generate")
     tok_path, last = out_dir / "tokenizer.json", out_dir / "last.pt"
     out_folder(out_dir)   # checked before any work; made only when every argument is known to be good
-    if resume and not last.is_file(): raise TreebookError(f"nothing to resume in {out_dir}: it holds no last.pt; start without --resume")
+    if resume and not last.is_file(): raise TreebookError(f"nothing to resume: {last} does not exist; start without --resume")
     if not resume and last.exists(): raise TreebookError(f"{out_dir} already holds a run (last.pt): pass resume=True / --resume, or another --out")
     load_manifest(data_dir)
     if threads: torch.set_num_threads(int(threads))
