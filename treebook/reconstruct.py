@@ -608,20 +608,15 @@ RADII = ("measured", "pipe")
 def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_info, t0):
     "The tree of the prepared points `p` (and with `return_info` its dict, see `reconstruct`)."
     labels, seg = None, None
-    if method == "paths":
-        tree, segment_of = segment_radii(path_skeleton(p), p, return_segment=True)
-        if radii == "pipe": tree = pipe_radii(tree)
-        if not return_info: return tree
-        full = point_labels(raw, p, segment_of, radius=3 * float(np.median(cKDTree(p).query(p, 2)[0][:, 1])))
-        return tree, dict(points=p, segment=segment_of, labels_full=full, hermite_joins=0, segmentation=None,
-                          seconds=time.perf_counter() - t0)
     if method == "partnet":
         from treebook.partnet import load_partnet, segment
         seg = segment(load_partnet(weights), p, seed=seed)  # merged as the weights' config says: linkage, threshold, test-time turns
         labels = seg["branch"]
-    tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True)
+    if method == "paths":  # its vertices follow the points, so it has no sharp joins to round
+        tree, segment_of = segment_radii(path_skeleton(p), p, return_segment=True)
+    else: tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True)
     last, joins = np.arange(tree.n), 0
-    if hermite:
+    if hermite and method != "paths":
         joins = int((_turns(tree) > 120).sum())
         tree, last = hermite_joins(tree, return_index=True)
     if radii == "pipe": tree = pipe_radii(tree)
