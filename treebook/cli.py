@@ -30,7 +30,8 @@ class _Parser(argparse.ArgumentParser):
 def _out_path(path: str, suffixes: tuple, what: str) -> Path:
     "Check, before any work, that `path` ends in one of `suffixes` and can be written."
     p = Path(path)
-    if p.suffix.lower() not in suffixes: raise TreebookError(f"{what} must end in {' or '.join(suffixes)}, got {p.name!r}")
+    if p.suffix.lower() not in suffixes:
+        raise TreebookError(f"{what} must end in {' or '.join(suffixes)}, got {p.name!r}")
     if p.is_dir(): raise TreebookError(f"cannot write {p}: it is a folder")
     if not p.parent.exists(): raise TreebookError(f"cannot write {p}: folder {p.parent} does not exist")
     if not p.parent.is_dir(): raise TreebookError(f"cannot write {p}: {p.parent} is a file, not a folder")
@@ -51,7 +52,8 @@ def _model_arg(model):
     s = str(model)
     if model is None or (os.sep not in s and not s.endswith(".pt")): return model
     p = Path(s)
-    if p.is_dir(): raise TreebookError(f"--model {p} is a folder: give a checkpoint (.pt), e.g. best.pt of a `treebook train` run")
+    if p.is_dir():
+        raise TreebookError(f"--model {p} is a folder: give a checkpoint (.pt), e.g. best.pt of a `treebook train` run")
     if not p.is_file(): raise TreebookError(f"no such model file: {p}")
     return model
 
@@ -76,13 +78,15 @@ def cmd_info(args):
           f"  bbox      min {fmt(i['bbox_min'])}\n            max {fmt(i['bbox_max'])}\n"
           f"  length    {i['total_length']:.4g} in all, thickest radius {i['max_radius']:.4g}"
           + (f"\n  arrays    {', '.join(i['attrs'])}" if i["attrs"] else "")
-          + (f"\n  origin    {fmt(i['origin'])} (map coordinates: positions are stored about it)" if "origin" in i else ""))
+          + (f"\n  origin    {fmt(i['origin'])} (map coordinates: positions are stored about it)" if "origin" in i
+             else ""))
     return 0
 
 def cmd_export(args):
     from treebook.tree import Tree
     from treebook import mesh
-    out = _out_path(args.out, (".ply",), "a skeleton file") if args.skeleton else _out_path(args.out, mesh.MESH_FORMATS, "a mesh file")
+    out = _out_path(args.out, (".ply",),
+                    "a skeleton file") if args.skeleton else _out_path(args.out, mesh.MESH_FORMATS, "a mesh file")
     t = Tree.load(args.tree)
     if args.skeleton: p = mesh.export_skeleton(t, out)
     else: p = mesh.export_mesh(t, out, sides=args.sides, leaves=args.leaves, seed=args.seed)
@@ -100,11 +104,14 @@ def cmd_render(args):
 def cmd_generate(args):
     from treebook.datasets import generate_dataset
     out, made = out_folder(args.out)
-    with _unmade_on_error(made):   # shards written stay (a second run resumes); a failure before the first leaves no folder
-        m = generate_dataset(args.species, args.n, out, max_branches=args.max_branches, stages=args.stages, scans=args.scans,
+    # shards written stay (a second run resumes); a failure before the first leaves no folder
+    with _unmade_on_error(made):
+        m = generate_dataset(args.species, args.n, out, max_branches=args.max_branches, stages=args.stages,
+                             scans=args.scans,
                              images=args.images, trees=args.trees, workers=args.workers, seed=args.seed)
     counts = m.get("counts", {})
-    print(f"wrote {args.out}/manifest.json: " + (", ".join(f"{k} {v}" for k, v in counts.items()) if counts else f"{args.n} trees"))
+    print(f"wrote {args.out}/manifest.json: "
+          + (", ".join(f"{k} {v}" for k, v in counts.items()) if counts else f"{args.n} trees"))
     return 0
 
 # %% ../nbs/11_cli.ipynb #4d9d3111
@@ -115,7 +122,8 @@ def write_trees(trees, out_dir, stem: str = "tree", mesh: bool = True, picture: 
     paths = []
     with all_or_nothing(made):
         try: out.mkdir(parents=True, exist_ok=True)
-        except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
+        except OSError as e:
+            raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
         for k, t in enumerate(trees):
             name = out / f"{stem}_{k:03d}" if len(trees) > 1 or stem == "tree" else out / stem
             paths.append(t.save(name.with_suffix(".npz")))
@@ -160,12 +168,16 @@ def cmd_reconstruct(args):
     skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
     t0 = time.time()
     pts = read_points(args.scan, up=args.up)
-    made = reconstruct(pts, method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
+    made = reconstruct(pts, method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees,
+                       radii=args.radii)
     made = made if args.trees == "all" else [made]
-    print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} branches) with {args.method} in {time.time() - t0:.1f} s")
+    print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} "
+          f"branches) with {args.method} in {time.time() - t0:.1f} s")
     meshes = [tree_mesh(t, sides=12).apply_translation(t.origin) for t in made]   # in the scan's coordinates
-    print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's diagonal of {coverage(pts, meshes):.1%} of its {len(pts):,} points")
-    numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p  # --trees all: tree_1.npz, tree_2.npz ...
+    print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's "
+          f"diagonal of {coverage(pts, meshes):.1%} of its {len(pts):,} points")
+    # --trees all: tree_1.npz, tree_2.npz ...
+    numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p
     wrote = []
     with all_or_nothing():   # the tree, the mesh and the skeleton: all of them, or (if one cannot be written) none
         for i, (tree, mesh) in enumerate(zip(made, meshes)):
@@ -189,7 +201,8 @@ def cmd_sample(args):
     out_folder(args.out); _model_arg(args.model)
     trees = sample_trees(args.n, model=args.model, temperature=args.temperature, top_p=args.top_p, top_k=args.top_k,
                          seed=args.seed, structure=not args.no_structure, progress=True)
-    for p in write_trees(trees, args.out, f"sampled_{Path(str(args.model)).stem}", picture=args.render, seed=args.seed): print(f"wrote {p}")
+    for p in write_trees(trees, args.out, f"sampled_{Path(str(args.model)).stem}", picture=args.render, seed=args.seed):
+        print(f"wrote {p}")
     return 0
 
 # %% ../nbs/11_cli.ipynb #24ed3d3e
@@ -202,7 +215,8 @@ def cmd_grow(args):
     from treebook.growth import grow_sequence, write_growth
     out, made = out_folder(args.out); _model_arg(args.model)
     _sampling_threads()
-    stages = grow_sequence(args.model, seed=args.seed, stages=args.stages, temperature=args.temperature, top_p=args.top_p, progress=True)
+    stages = grow_sequence(args.model, seed=args.seed, stages=args.stages, temperature=args.temperature,
+                           top_p=args.top_p, progress=True)
     with all_or_nothing(made): paths = write_growth(stages, out)
     for p in paths: print(f"wrote {p}")
     return 0
@@ -214,7 +228,8 @@ def cmd_complete(args):
     out, made = out_folder(args.out); _model_arg(args.model)
     partial = Tree.load(args.partial)
     _sampling_threads()
-    trees = complete(partial, n=args.n, seed=args.seed, model=args.model, temperature=args.temperature, top_p=args.top_p, progress=True)
+    trees = complete(partial, n=args.n, seed=args.seed, model=args.model, temperature=args.temperature,
+                     top_p=args.top_p, progress=True)
     with all_or_nothing(made): paths = write_grid(trees, out, "completion", first=partial)
     for p in paths: print(f"wrote {p}")
     return 0
@@ -234,17 +249,23 @@ def _cmd_condition(kind):
     def run(args):
         from treebook import condition
         out_folder(args.out); _model_arg(args.model)
-        if kind == "sketch": given = condition.read_lines(args.input); condition.sketch_input(given)   # read and checked before any model
+        # read and checked before any model
+        if kind == "sketch": given = condition.read_lines(args.input); condition.sketch_input(given)
         elif kind == "points":
             from treebook.pointio import read_points
             given = read_points(args.input, up=args.up); condition.points_input(given)
         else: given = _read_image(args.input); condition.image_input(given)
         kw = dict(n=args.n, seed=args.seed, temperature=args.temperature, top_p=args.top_p)
         _sampling_threads()
-        if kind == "sketch": trees = condition.sketch_to_tree(given, model=args.model or "elm-sketch", fit=args.fit, candidates=args.candidates, **kw)
+        if kind == "sketch":
+            trees = condition.sketch_to_tree(given, model=args.model or "elm-sketch", fit=args.fit,
+                                             candidates=args.candidates, **kw)
         elif kind == "points": trees = condition.points_to_tree(given, model=args.model or "elm-points", up="z", **kw)
-        else: trees = condition.image_to_tree(given, model=args.model or "elm-image", fit=args.fit, candidates=args.candidates, **kw)
-        for p in write_trees([t for t in trees if t.n], args.out, f"{kind}_to_tree", picture=args.render, seed=args.seed): print(f"wrote {p}")
+        else: trees = condition.image_to_tree(given, model=args.model or "elm-image", fit=args.fit,
+                                              candidates=args.candidates, **kw)
+        for p in write_trees([t for t in trees if t.n], args.out, f"{kind}_to_tree", picture=args.render,
+                             seed=args.seed):
+            print(f"wrote {p}")
         return 0
     return run
 
@@ -252,7 +273,8 @@ def _cmd_condition(kind):
 DEMO_STEPS = {}
 
 def demo_step(key: str, name: str):
-    "Register a function `f(out: Path, seed: int) -> list[Path]` as the step `key` of `treebook demo`, described by `name`."
+    ("Register a function `f(out: Path, seed: int) -> list[Path]` as the step `key` of `treebook demo`, described by "
+     "`name`.")
     def register(f):
         DEMO_STEPS[key] = (name, f); return f
     return register
@@ -268,7 +290,8 @@ def _demo_tree(out: Path, seed: int):
             export_skeleton(t, out / "tree_skeleton.ply"), save_image(render(m, size=(512, 512)), out / "tree.png")]
 
 def _lazy_step(target: str, sub: str):
-    "A demo step that imports `module:function` only when it runs, writing into the subfolder `sub` of the demo's folder."
+    ("A demo step that imports `module:function` only when it runs, writing into the subfolder `sub` of the demo's "
+     "folder.")
     def step(out: Path, seed: int):
         import importlib
         mod, fn = target.split(":")
@@ -278,10 +301,14 @@ def _lazy_step(target: str, sub: str):
 # each later chapter's demo function, in the order the tour shows them: key, what it shows, function, subfolder
 for key, name, target, sub in [
         ("species", "a gallery of the procedural species (botany)", "treebook.botany:demo_gallery", ""),
-        ("grammar", "a wavelet grammar inferred from a shipped real scan, and three propagated trees", "treebook.wavelet:demo_grammar", "grammar"),
-        ("reconstruct", "a real scan reconstructed into a tree (TreePartNet)", "treebook.reconstruct:demo_reconstruct", "reconstruct"),
-        ("trees", "two trees in one scan: found by their stems and reconstructed one by one", "treebook.reconstruct:demo_trees", "trees"),
-        ("foliage", "a leafy scan: wood and leaves told apart, the tree reconstructed from the wood", "treebook.foliage:demo_foliage", "foliage"),
+        ("grammar", "a wavelet grammar inferred from a shipped real scan, and three propagated trees",
+         "treebook.wavelet:demo_grammar", "grammar"),
+        ("reconstruct", "a real scan reconstructed into a tree (TreePartNet)", "treebook.reconstruct:demo_reconstruct",
+         "reconstruct"),
+        ("trees", "two trees in one scan: found by their stems and reconstructed one by one",
+         "treebook.reconstruct:demo_trees", "trees"),
+        ("foliage", "a leafy scan: wood and leaves told apart, the tree reconstructed from the wood",
+         "treebook.foliage:demo_foliage", "foliage"),
         ("sample", "trees sampled from the shipped elm model (HourglassTree)", "treebook.train:demo_sample", "sample"),
         ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.growth:demo_growth", "growth")]:
     demo_step(key, name)(_lazy_step(target, sub))
@@ -290,11 +317,14 @@ def cmd_demo(args):
     out, made = out_folder(args.out)
     keys = list(DEMO_STEPS) if args.steps is None else [k.strip() for k in args.steps.split(",") if k.strip()]
     unknown = [k for k in keys if k not in DEMO_STEPS]
-    if unknown or not keys: raise TreebookError(f"unknown demo step(s) {', '.join(unknown) or '(none given)'}: choose from {', '.join(DEMO_STEPS)}")
+    if unknown or not keys:
+        raise TreebookError(f"unknown demo step(s) {', '.join(unknown) or '(none given)'}: choose from "
+                            f"{', '.join(DEMO_STEPS)}")
     t0 = time.time()
     with _unmade_on_error(made):   # each step's files are complete when it ends; a failure before any leaves no folder
         try: out.mkdir(parents=True, exist_ok=True)
-        except OSError as e: raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
+        except OSError as e:
+            raise TreebookError(f"cannot create the output folder {out}: {(e.strerror or str(e)).lower()}") from None
         for k, key in enumerate(keys, 1):
             name, step = DEMO_STEPS[key]
             t1 = time.time()
@@ -318,68 +348,93 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="treebook", description="Learn, generate and reconstruct 3D trees.")
     p.add_argument("--version", action="version", version=f"treebook {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    s = sub.add_parser("demo", help="run the tour of treebook on shipped data (offline)", description="Run every demo step; write the results into --out.")
+    s = sub.add_parser("demo", help="run the tour of treebook on shipped data (offline)",
+                       description="Run every demo step; write the results into --out.")
     s.add_argument("--out", default="treebook-demo", help="output folder (default: treebook-demo)")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
-    s.add_argument("--steps", default=None, help=f"comma-separated steps to run (default: all of {', '.join(DEMO_STEPS)})")
+    s.add_argument("--steps", default=None,
+                   help=f"comma-separated steps to run (default: all of {', '.join(DEMO_STEPS)})")
     s.set_defaults(func=cmd_demo)
-    s = sub.add_parser("info", help="describe a tree file", description="Print branch count, height, depth and bounding box of a tree (.npz or .json).")
+    s = sub.add_parser("info", help="describe a tree file",
+                       description="Print branch count, height, depth and bounding box of a tree (.npz or .json).")
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--json", action="store_true", help="print the numbers as JSON")
     s.set_defaults(func=cmd_info)
-    s = sub.add_parser("export", help="write a tree as a mesh (OBJ, GLB, PLY) or a skeleton PLY", description="Mesh a tree with generalized cylinders and write it; --skeleton writes nodes and edges instead.")
+    s = sub.add_parser("export", help="write a tree as a mesh (OBJ, GLB, PLY) or a skeleton PLY",
+                       description="Mesh a tree with generalized cylinders and write it; --skeleton writes nodes and "
+                       "edges instead.")
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--out", required=True, help="output file: .obj, .glb or .ply")
-    s.add_argument("--skeleton", action="store_true", help="write the skeleton (PLY: x y z radius per node, edges) instead of a mesh")
+    s.add_argument("--skeleton", action="store_true",
+                   help="write the skeleton (PLY: x y z radius per node, edges) instead of a mesh")
     s.add_argument("--sides", type=flag_number(int, 3, 256), default=10, help="vertices around each ring (default: 10)")
     s.add_argument("--leaves", action="store_true", help="add procedural leaves on the tips")
     s.add_argument("--seed", type=SEED, default=0, help="random seed for the leaves (default: 0)")
     s.set_defaults(func=cmd_export)
-    s = sub.add_parser("render", help="draw a tree into a PNG", description="Render a tree offscreen (pyvista, or matplotlib when no OpenGL).")
+    s = sub.add_parser("render", help="draw a tree into a PNG",
+                       description="Render a tree offscreen (pyvista, or matplotlib when no OpenGL).")
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--out", required=True, help="output image: .png or .jpg")
-    s.add_argument("--view", default="iso", choices=["iso", "front", "side", "top"], help="camera direction (default: iso)")
-    s.add_argument("--size", type=flag_number(int, 16, 8192), default=768, help="image width and height in pixels (default: 768)")
+    s.add_argument("--view", default="iso", choices=["iso", "front", "side", "top"],
+                   help="camera direction (default: iso)")
+    s.add_argument("--size", type=flag_number(int, 16, 8192), default=768,
+                   help="image width and height in pixels (default: 768)")
     s.add_argument("--leaves", action="store_true", help="draw procedural leaves on the tips")
-    s.add_argument("--backend", default="auto", choices=["auto", "pyvista", "matplotlib"], help="renderer (default: auto)")
+    s.add_argument("--backend", default="auto", choices=["auto", "pyvista", "matplotlib"],
+                   help="renderer (default: auto)")
     s.set_defaults(func=cmd_render)
-    s = sub.add_parser("generate", help="grow a dataset of procedural trees", description="Grow trees of one species into sharded .npz files plus manifest.json (resumable).")
+    s = sub.add_parser("generate", help="grow a dataset of procedural trees",
+                       description="Grow trees of one species into sharded .npz files plus manifest.json (resumable).")
     s.add_argument("--species", required=True, help="elm, hickory, shadbush, spruce, tulip or vitellaria")
     s.add_argument("--n", type=flag_number(int, 1, 10_000_000), required=True, help="number of trees")
-    s.add_argument("--max-branches", type=flag_number(int, 2, 100_000), default=None, help="branch cap (default: the species preset's)")
-    s.add_argument("--stages", type=flag_number(int, 1, 1000), default=1, help="growth stages kept per tree (default: 1, the grown tree)")
+    s.add_argument("--max-branches", type=flag_number(int, 2, 100_000), default=None,
+                   help="branch cap (default: the species preset's)")
+    s.add_argument("--stages", type=flag_number(int, 1, 1000), default=1,
+                   help="growth stages kept per tree (default: 1, the grown tree)")
     s.add_argument("--scans", action="store_true", help="also write virtual scans with per-point labels")
     s.add_argument("--images", action="store_true", help="also write silhouette images and sketches")
-    s.add_argument("--trees", action="store_true", help="also write every tree as its own .npz (trees/tree_00000.npz, ...)")
+    s.add_argument("--trees", action="store_true",
+                   help="also write every tree as its own .npz (trees/tree_00000.npz, ...)")
     s.add_argument("--workers", type=flag_number(int, 1, 256), default=2, help="worker processes (default: 2)")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_generate)
     def scan_args(s):
         s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
-        s.add_argument("--grid", type=_grid_size, default=128, help="voxel grid size, a power of two >= 8 (default: 128)")
+        s.add_argument("--grid", type=_grid_size, default=128,
+                       help="voxel grid size, a power of two >= 8 (default: 128)")
         s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
-        s.add_argument("--symmetrize", action="store_true", help="mirror the scan about the vertical plane through the root first")
-    s = sub.add_parser("grammar", help="infer a wavelet shape grammar from a scan", description="Voxelise a scan, decompose it with 3D Haar wavelets, build a tree per dyad and infer L-system productions (Friedman and Stamos 2013).")
+        s.add_argument("--symmetrize", action="store_true",
+                       help="mirror the scan about the vertical plane through the root first")
+    s = sub.add_parser("grammar", help="infer a wavelet shape grammar from a scan",
+                       description="Voxelise a scan, decompose it with 3D Haar wavelets, build a tree per dyad and "
+                       "infer L-system productions (Friedman and Stamos 2013).")
     scan_args(s)
-    s.add_argument("--v", type=flag_number(float, 0), default=0.2, help="lossy compression threshold on orthonormal Haar coefficients (default: 0.2)")
+    s.add_argument("--v", type=flag_number(float, 0), default=0.2,
+                   help="lossy compression threshold on orthonormal Haar coefficients (default: 0.2)")
     s.add_argument("--out", required=True, help="grammar file (.json)")
     s.set_defaults(func=cmd_grammar)
-    s = sub.add_parser("enhance", help="add detail to a scan's skeleton with its own grammar", description="Infer the grammar of a scan and apply its productions to grow finer levels than were scanned.")
+    s = sub.add_parser("enhance", help="add detail to a scan's skeleton with its own grammar",
+                       description="Infer the grammar of a scan and apply its productions to grow finer levels than "
+                       "were scanned.")
     scan_args(s)
     s.add_argument("--levels", type=flag_number(int, 0, 4), default=1, help="finer levels to add (default: 1)")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_enhance)
-    s = sub.add_parser("propagate", help="grow new trees from a grammar", description="Grow n different trees like the scanned one from a grammar JSON.")
+    s = sub.add_parser("propagate", help="grow new trees from a grammar",
+                       description="Grow n different trees like the scanned one from a grammar JSON.")
     s.add_argument("grammar", help="grammar file written by `treebook grammar`")
     s.add_argument("--n", type=flag_number(int, 1, 10_000), default=5, help="number of trees (default: 5)")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_propagate)
-    s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan", description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic skeleton (classic), then join one connected tree in the scan's frame and units (one per stem with --trees).")
+    s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan",
+                       description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic "
+                       "skeleton (classic), then join one connected tree in the scan's frame and units (one per stem "
+                       "with --trees).")
     s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
     s.add_argument("--out", required=True, help="tree file (.npz or .json)")
     s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply)")
@@ -387,53 +442,74 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", default="paths", choices=["paths", "partnet", "classic"],
                    help="paths through the points (default), the neural decomposition, or geodesic level sets")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
-    s.add_argument("--foliage", action="store_true", help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
+    s.add_argument("--foliage", action="store_true",
+                   help="remove leaf points first (the shipped wood/leaf PointNet++, chapter 09c)")
     s.add_argument("--radii", default="measured", choices=["measured", "pipe"],
-                   help="branch radii measured from the points (default; the mesh hugs the scan) or from the pipe model scaled by the trunk (a clean taper)")
+                   help="branch radii measured from the points (default; the mesh hugs the scan) or from the pipe "
+                   "model scaled by the trunk (a clean taper)")
     s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
-                   help="when the scan seems to hold several trees: join them into one (default, with a warning), keep the largest, or write all (OUT_1, OUT_2 ...)")
+                   help="when the scan seems to hold several trees: join them into one (default, with a warning), keep "
+                   "the largest, or write all (OUT_1, OUT_2 ...)")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.set_defaults(func=cmd_reconstruct)
-    s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False, description="Train a TreeTransformer (see `treebook train --help`).")
+    s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False,
+                       description="Train a TreeTransformer (see `treebook train --help`).")
     s.add_argument("rest", nargs=argparse.REMAINDER, help="the options of `treebook train`")
     s.set_defaults(func=cmd_train)
-    s = sub.add_parser("sample", help="sample trees from a shipped model", description="Sample trees from a pretrained HourglassTree model.")
+    s = sub.add_parser("sample", help="sample trees from a shipped model",
+                       description="Sample trees from a pretrained HourglassTree model.")
     s.add_argument("--n", type=flag_number(int, 1, MAX_SAMPLES), default=16, help="number of trees (default: 16)")
     s.add_argument("--model", default="elm", help="shipped model name or a checkpoint path (default: elm)")
-    s.add_argument("--temperature", type=flag_number(float, 0), default=1.0, help="sampling temperature (default: 1.0, the model's own distribution)")
-    s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=1.0, help="nucleus sampling mass (default: 1.0, off)")
-    s.add_argument("--top-k", type=flag_number(int, 1), default=None, help="keep only the k likeliest tokens (default: off)")
+    s.add_argument("--temperature", type=flag_number(float, 0), default=1.0,
+                   help="sampling temperature (default: 1.0, the model's own distribution)")
+    s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=1.0,
+                   help="nucleus sampling mass (default: 1.0, off)")
+    s.add_argument("--top-k", type=flag_number(int, 1), default=None,
+                   help="keep only the k likeliest tokens (default: off)")
     s.add_argument("--no-structure", action="store_true", help="turn structure-aware decoding off")
     s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_sample)
     def sampling_args(s, model):
-        s.add_argument("--model", default=model, help=f"shipped model name or a checkpoint path (default: {model or 'the one for this input'})")
-        s.add_argument("--temperature", type=flag_number(float, 0), default=0.9, help="sampling temperature (default: 0.9)")
-        s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=0.95, help="nucleus sampling mass (default: 0.95)")
+        s.add_argument("--model", default=model,
+                       help=f"shipped model name or a checkpoint path (default: {model or 'the one for this input'})")
+        s.add_argument("--temperature", type=flag_number(float, 0), default=0.9,
+                       help="sampling temperature (default: 0.9)")
+        s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=0.95,
+                       help="nucleus sampling mass (default: 0.95)")
         s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
         s.add_argument("--out", required=True, help="output folder")
-    s = sub.add_parser("grow", help="sample a growing tree: one tree per growth stage", description="Sample the stages of one growing tree from a growth model; writes stage_XX.npz, meshes, a filmstrip PNG and a GIF.")
+    s = sub.add_parser("grow", help="sample a growing tree: one tree per growth stage",
+                       description="Sample the stages of one growing tree from a growth model; writes stage_XX.npz, "
+                       "meshes, a filmstrip PNG and a GIF.")
     s.add_argument("--stages", type=flag_number(int, 1, 1000), default=10, help="number of stages (default: 10)")
     sampling_args(s, "elm-grow")
     s.set_defaults(func=cmd_grow)
-    s = sub.add_parser("complete", help="complete a partial tree", description="Use a partial tree as the prompt and sample completions that keep its branches.")
+    s = sub.add_parser("complete", help="complete a partial tree",
+                       description="Use a partial tree as the prompt and sample completions that keep its branches.")
     s.add_argument("partial", help="partial tree (.npz or .json)")
     s.add_argument("--n", type=flag_number(int, 1, 10_000), default=4, help="number of completions (default: 4)")
     sampling_args(s, "elm")
     s.set_defaults(func=cmd_complete)
-    for name, kind, what in (("sketch2tree", "sketch", "a 2D sketch: a .json list of [x0, y0, x1, y1] segments or an .svg of lines"),
-                             ("points2tree", "points", "a point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy"),
+    for name, kind, what in (("sketch2tree", "sketch",
+                              "a 2D sketch: a .json list of [x0, y0, x1, y1] segments or an .svg of lines"),
+                             ("points2tree", "points",
+                              "a point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy"),
                              ("image2tree", "image", "a silhouette image (.png or .jpg)")):
-        s = sub.add_parser(name, help=f"a tree from {what.split(':')[0]}", description=f"Sample trees conditioned on {what}.")
+        s = sub.add_parser(name, help=f"a tree from {what.split(':')[0]}",
+                           description=f"Sample trees conditioned on {what}.")
         s.add_argument("input", help=what)
         s.add_argument("--n", type=flag_number(int, 1, 10_000), default=1, help="number of trees (default: 1)")
-        if kind == "points": s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
+        if kind == "points":
+            s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
         if kind != "points":
             s.add_argument("--fit", action=argparse.BooleanOptionalAction, default=True,
-                           help=f"pull the tree onto the {'silhouette' if kind == 'image' else 'strokes'} (default: on)")
-            s.add_argument("--candidates", type=flag_number(int, 1, 64), default=4, help="sample this many trees per output and keep the one whose outline matches best (default: 4)")
+                           help=f"pull the tree onto the {'silhouette' if kind == 'image' else 'strokes'} (default: "
+                           f"on)")
+            s.add_argument("--candidates", type=flag_number(int, 1, 64), default=4,
+                           help="sample this many trees per output and keep the one whose outline matches best "
+                           "(default: 4)")
         s.add_argument("--render", action="store_true", help="also write a PNG per tree")
         sampling_args(s, None)
         s.set_defaults(func=_cmd_condition(kind))
@@ -445,10 +521,12 @@ def _say_warning(message, category, filename, lineno, file=None, line=None):
 
 # the library speaks to Python callers; on the command line its hints name what a shell user can do instead
 _FOR_THE_SHELL = [(" (an empty tree is only allowed with allow_empty=True)", ""),
-                  ("; use Tree.from_segments to infer parents, or check=False", ": the file's parent indices are wrong"),
+                  ("; use Tree.from_segments to infer parents, or check=False",
+                   ": the file's parent indices are wrong"),
                   (" or build the tree with Tree.from_segments", ""),
                   ("save it again with TreeTransformer.save", "give a .pt written by `treebook train`"),
-                  ("pass resume=True / --resume", "pass --resume"), ("generate_dataset / treebook generate", "`treebook generate`"),
+                  ("pass resume=True / --resume", "pass --resume"),
+                  ("generate_dataset / treebook generate", "`treebook generate`"),
                   ("(pass up='y' for y-up files)", "(pass --up y for y-up files)")]
 
 def _for_the_shell(message: str) -> str:
@@ -469,7 +547,8 @@ def main(argv=None) -> int:
     with warnings.catch_warnings():
         warnings.showwarning = _say_warning
         try:
-            if argv[:1] == ["train"]: code = cmd_train(argparse.Namespace(rest=argv[1:]))  # its own parser: options pass through untouched
+            # its own parser: options pass through untouched
+            if argv[:1] == ["train"]: code = cmd_train(argparse.Namespace(rest=argv[1:]))
             else:
                 args = build_parser().parse_args(argv)
                 code = args.func(args) or 0

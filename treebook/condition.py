@@ -38,7 +38,8 @@ N_POINTS = 200
 MAX_LINES = 256
 
 class QueryPrompt(nn.Module):
-    "`n_queries` learnable queries cross-attend over features (B, m, dim) (True in `mask` = padding) -> (B, length, dim)."
+    ("`n_queries` learnable queries cross-attend over features (B, m, dim) (True in `mask` = padding) -> (B, length, "
+     "dim).")
     def __init__(self, dim: int, n_queries: int = N_QUERIES, heads: int = 4):
         super().__init__()
         self.n_queries, self.length = n_queries, -(-n_queries // BLOCK) * BLOCK
@@ -86,11 +87,14 @@ def _image_gray(image) -> np.ndarray:
         p = Path(image)
         if not p.is_file(): raise TreebookError(f"no such image file: {p}")
         try: image = Image.open(p)
-        except Exception as e: raise TreebookError(f"cannot read {p} as an image ({type(e).__name__}): give a PNG or JPEG") from None
+        except Exception as e:
+            raise TreebookError(f"cannot read {p} as an image ({type(e).__name__}): give a PNG or JPEG") from None
     if isinstance(image, Image.Image): image = np.asarray(image.convert("L"))
     a = np.asarray(image)
     if a.ndim == 3: a = a[..., :3].mean(-1) if a.shape[-1] >= 3 else a[..., 0]
-    if a.ndim != 2 or min(a.shape) < 16: raise TreebookError(f"an image must be 2-D (or 2-D with colour channels), at least 16 pixels a side; got shape {a.shape}")
+    if a.ndim != 2 or min(a.shape) < 16:
+        raise TreebookError(f"an image must be 2-D (or 2-D with colour channels), at least 16 pixels a side; got shape "
+                            f"{a.shape}")
     a = a.astype(np.float32)
     if not np.isfinite(a).all(): raise TreebookError("the image holds NaN or infinity")
     if a.max() > 1.0: a = a / 255.0
@@ -100,7 +104,8 @@ def _image_gray(image) -> np.ndarray:
 
 def _resized(a, size):
     from PIL import Image
-    return np.asarray(Image.fromarray((a * 255).astype(np.uint8)).resize((size, size), Image.BILINEAR), np.float32) / 255.0
+    return np.asarray(Image.fromarray((a * 255).astype(np.uint8)).resize((size, size), Image.BILINEAR),
+                      np.float32) / 255.0
 
 def image_input(image) -> np.ndarray:
     "(112, 112) float32 in [0, 1], tree bright, from a (H, W[, C]) array, a PIL image or an image file."
@@ -113,32 +118,39 @@ def silhouette_target(image, size: int = 224) -> np.ndarray:
 def sketch_input(lines) -> np.ndarray:
     "(m, 4) float32 segments x0 z0 x1 z1 in the canonical frame from image-coordinate segments (y down); at most 256."
     a = np.asarray(lines, np.float64)
-    if a.ndim != 2 or a.shape[1] != 4: raise TreebookError(f"a sketch is a list of segments [x0, y0, x1, y1]; got shape {a.shape}")
+    if a.ndim != 2 or a.shape[1] != 4:
+        raise TreebookError(f"a sketch is a list of segments [x0, y0, x1, y1]; got shape {a.shape}")
     if not len(a): raise TreebookError("the sketch has no lines: draw at least one segment")
     if not np.isfinite(a).all(): raise TreebookError("the sketch holds NaN or infinity")
     p = a.reshape(-1, 2)
     base = p[np.argmax(p[:, 1])]
     h = p[:, 1].max() - p[:, 1].min()
-    if h <= 0: raise TreebookError("the sketch has no height: draw the tree upright (y grows downwards, as in an image)")
-    out = np.column_stack([(a[:, 0] - base[0]) / h, (base[1] - a[:, 1]) / h, (a[:, 2] - base[0]) / h, (base[1] - a[:, 3]) / h])
+    if h <= 0:
+        raise TreebookError("the sketch has no height: draw the tree upright (y grows downwards, as in an image)")
+    out = np.column_stack([(a[:, 0] - base[0]) / h, (base[1] - a[:, 1]) / h, (a[:, 2] - base[0]) / h,
+                           (base[1] - a[:, 3]) / h])
     if len(out) > MAX_LINES: out = out[np.random.default_rng(0).choice(len(out), MAX_LINES, replace=False)]
     return out.astype(np.float32)
 
 def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
-    "(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by the front camera."
+    ("(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by "
+     "the front camera.")
     from PIL import Image, ImageDraw
     from treebook.scan import _to_px
     s = np.asarray(segments, np.float64)
     img = Image.new("L", (size, size), 0); draw = ImageDraw.Draw(img)
-    for a, b in zip(_to_px(s[:, :2], size), _to_px(s[:, 2:], size)): draw.line([tuple(a), tuple(b)], fill=255, width=width)
+    for a, b in zip(_to_px(s[:, :2], size), _to_px(s[:, 2:], size)):
+        draw.line([tuple(a), tuple(b)], fill=255, width=width)
     return np.asarray(img) > 0
 
 def points_input(points, seed: int = 0, up: str = "z"):
-    "(Frame, (200, 3) float32 points in that frame): the cloud (array or scan file; `up` its vertical axis) resampled to 200 points, base at the origin, height 1."
+    ("(Frame, (200, 3) float32 points in that frame): the cloud (array or scan file; `up` its vertical axis) resampled "
+     "to 200 points, base at the origin, height 1.")
     from treebook.pointio import read_points
     p = read_points(points, up=up)
     z0, h = p[:, 2].min(), np.ptp(p[:, 2])
-    if h <= 0: raise TreebookError("the point cloud is flat (no height): a tree stands along z (pass up='y' for y-up files)")
+    if h <= 0:
+        raise TreebookError("the point cloud is flat (no height): a tree stands along z (pass up='y' for y-up files)")
     low = p[p[:, 2] <= z0 + 0.05 * h]
     frame = Frame((float(np.median(low[:, 0])), float(np.median(low[:, 1])), float(z0)), float(1 / h))
     q = (p - np.asarray(frame.origin)) * frame.scale
@@ -147,7 +159,8 @@ def points_input(points, seed: int = 0, up: str = "z"):
 
 # %% ../nbs/10a_condition.ipynb #eccb3d7d
 def read_lines(src) -> np.ndarray:
-    "(m, 4) float64 segments from an array, a .json file (list of [x0, y0, x1, y1]) or an .svg of lines, polylines and M/L paths."
+    ("(m, 4) float64 segments from an array, a .json file (list of [x0, y0, x1, y1]) or an .svg of lines, polylines "
+     "and M/L paths.")
     if not isinstance(src, (str, Path)):
         a = np.asarray(src, np.float64)
         if a.ndim != 2 or a.shape[1] != 4: raise TreebookError(f"segments must have shape (m, 4); got {a.shape}")
@@ -161,7 +174,8 @@ def read_lines(src) -> np.ndarray:
         d = d.get("lines", []) if isinstance(d, dict) else d
         if not isinstance(d, list): raise TreebookError(f"{p} must hold a list of segments [x0, y0, x1, y1]")
         try: a = np.asarray(d, np.float64).reshape(-1, 4) if len(d) else np.zeros((0, 4))
-        except (ValueError, TypeError): raise TreebookError(f"{p} must hold a list of segments [x0, y0, x1, y1]") from None
+        except (ValueError, TypeError):
+            raise TreebookError(f"{p} must hold a list of segments [x0, y0, x1, y1]") from None
     elif p.suffix.lower() == ".svg":
         num = r"(-?[\d.]+(?:e-?\d+)?)"
         segs = []
@@ -197,7 +211,8 @@ def _batch_cond(kind, items):
 
 class ConditionalTree(nn.Module):
     "Encoder + 50-query prompt + hourglass decoder: a tree conditioned on an image, a sketch or points."
-    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4, broadcast: bool = True,
+    def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4,
+                 broadcast: bool = True,
                  glimpse: bool = False, tok: Tokenizer | None = None):
         super().__init__()
         if kind not in KINDS: raise TreebookError(f"unknown condition {kind!r}: use one of {', '.join(KINDS)}")
@@ -205,11 +220,13 @@ class ConditionalTree(nn.Module):
         self.kind, self.n_queries, self.heads, self.broadcast = kind, n_queries, heads, broadcast
         self.encoder = ImageEncoder(dim) if kind == "image" else SetEncoder(4 if kind == "sketch" else 3, dim, heads)
         self.prompt = QueryPrompt(dim, n_queries, heads)
-        if broadcast:  # the pooled features, added to every token's embedding; zero at first, so a trained decoder starts unchanged
+        # the pooled features, added to every token's embedding; zero at first, so a trained decoder starts unchanged
+        if broadcast:
             self.summary = nn.Linear(dim, dim)
             nn.init.zeros_(self.summary.weight); nn.init.zeros_(self.summary.bias)
         self.decoder = decoder
-        self.glimpse = Glimpse(dim, tok, volume=kind == "points") if glimpse else None   # features where the tree is being drawn (below)
+        # features where the tree is being drawn (below)
+        self.glimpse = Glimpse(dim, tok, volume=kind == "points") if glimpse else None
 
     def condition(self, x, mask=None) -> tuple:
         "(prefix (B, 56, dim), bias (B, dim) or None): the query prompt and the broadcast summary of the input."
@@ -236,7 +253,8 @@ class ConditionalTree(nn.Module):
         P = self.prompt.length
         seqs = torch.as_tensor(seqs)
         full = torch.cat([torch.full((seqs.shape[0], P), COND, dtype=torch.long, device=seqs.device), seqs], 1)
-        with self.conditioned(x, mask) as (prefix, bias), condition_prefix(self.decoder, prefix, bias): logits = self.decoder(full[:, :-1])
+        with self.conditioned(x, mask) as (prefix, bias), condition_prefix(self.decoder, prefix, bias):
+            logits = self.decoder(full[:, :-1])
         target = full[:, 1:].masked_fill(full[:, 1:] >= COND, PAD)
         return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
 
@@ -250,21 +268,27 @@ class Glimpse(nn.Module):
         width = width or (16 if volume else 32)  # 3D maps cost more per channel
         Conv = nn.Conv3d if volume else nn.Conv2d
         conv = lambda a, b, s=1: Conv(a, b, 3, stride=s, padding=1)
-        self.fine = nn.Sequential(conv(1, width), nn.GELU(), conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
+        self.fine = nn.Sequential(conv(1, width), nn.GELU(), conv(width, width, 2), nn.GELU(), conv(width, width),
+                                  nn.GELU())
         self.coarse = nn.Sequential(conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU(),
                                     conv(width, width, 2), nn.GELU(), conv(width, width), nn.GELU())
         self.out = nn.Sequential(nn.Linear(2 * width + 1, dim), nn.GELU(), nn.Linear(dim, dim))
-        nn.init.zeros_(self.out[-1].weight); nn.init.zeros_(self.out[-1].bias)  # zero at first: a trained decoder starts unchanged
+        # zero at first: a trained decoder starts unchanged
+        nn.init.zeros_(self.out[-1].weight); nn.init.zeros_(self.out[-1].bias)
         gx = gy = gz = np.zeros(N_VALUES)
-        if tok is not None:  # the grid_sample coordinate (-1..1) of each bin in the front camera's window (y: as wide as x)
+        # the grid_sample coordinate (-1..1) of each bin in the front camera's window (y: as wide as x)
+        if tok is not None:
             from treebook.scan import WINDOW
             x0, x1, z0, z1 = WINDOW
             gx, gy = (tok.centres[0] - x0) / (x1 - x0) * 2 - 1, (tok.centres[1] - x0) / (x1 - x0) * 2 - 1
-            gz = (tok.centres[2] - z0) / (z1 - z0) * 2 - 1 if volume else (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1  # image rows run down
-        for k, v in (("gx", gx), ("gz", gz)) + ((("gy", gy),) if volume else ()): self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
+            # image rows run down
+            gz = (tok.centres[2] - z0) / (z1 - z0) * 2 - 1 if volume else (z1 - tok.centres[2]) / (z1 - z0) * 2 - 1
+        for k, v in (("gx", gx), ("gz", gz)) + ((("gy", gy),) if volume else ()):
+            self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
 
     def maps(self, x) -> tuple:
-        "(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112); with `volume` (16^3, 4^3) maps of grids (B, 1, 32, 32, 32)."
+        ("(56 x 56, 14 x 14) feature maps of images `x` (B, 1, 112, 112); with `volume` (16^3, 4^3) maps of grids (B, "
+         "1, 32, 32, 32).")
         f = self.fine(x)
         return f, self.coarse(f)
 
@@ -280,37 +304,47 @@ class Glimpse(nn.Module):
             at = torch.where(is_axis, torch.arange(T, device=dev).expand(B, T), -1).cummax(1).values
             return torch.where(at >= 0, idx.gather(1, at.clamp_min(0)), before[:, None].expand(B, T))
         lx, lz = (last(value & ((slot == a) | (slot == a + 4)), carry[a]) for a in (0, 2))
-        ly = last(value & ((slot == 1) | (slot == 5)), carry[1]) if self.volume else carry[1][:, None]   # y: only a volume looks at depth
+        # y: only a volume looks at depth
+        ly = last(value & ((slot == 1) | (slot == 5)), carry[1]) if self.volume else carry[1][:, None]
         known = ((lx >= 0) & (lz >= 0) & ((ly >= 0) | (not self.volume)))[..., None]
-        axes = (self.gx[lx.clamp_min(0)], self.gy[ly.clamp_min(0)], self.gz[lz.clamp_min(0)]) if self.volume else (self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)])
+        axes = (self.gx[lx.clamp_min(0)], self.gy[ly.clamp_min(0)],
+                self.gz[lz.clamp_min(0)]) if self.volume else (self.gx[lx.clamp_min(0)], self.gz[lz.clamp_min(0)])
         grid = torch.stack(axes, -1).view(B, T, *[1] * (len(axes) - 1), len(axes))   # (B, T, 1, 2) or (B, T, 1, 1, 3)
-        feats = [F.grid_sample(m.expand(B, *m.shape[1:]) if m.shape[0] != B else m, grid, align_corners=False).reshape(B, m.shape[1], T).transpose(1, 2)
+        feats = [F.grid_sample(m.expand(B, *m.shape[1:]) if m.shape[0] != B else m, grid,
+                               align_corners=False).reshape(B, m.shape[1], T).transpose(1, 2)
                  for m in maps]
         return self.out(torch.cat(feats + [known.float()], -1)) * known, (lx[:, -1], ly[:, -1], lz[:, -1])
 
 def stroke_images(x, mask=None) -> torch.Tensor:
-    "(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front camera (`sketch_target`)."
+    ("(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front "
+     "camera (`sketch_target`).")
     ok = np.ones(x.shape[:2], bool) if mask is None else ~mask.cpu().numpy()
-    pics = np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s, k in zip(x.cpu().numpy(), ok)])
+    pics = np.stack([_resized(sketch_target(s[k]).astype(np.float32), IMAGE_INPUT) for s,
+                     k in zip(x.cpu().numpy(), ok)])
     return torch.from_numpy(pics)[:, None].to(x.device)
 
 def point_volumes(x, size: int = 32) -> torch.Tensor:
-    "(B, 1, size, size, size) grids (z, y, x) of prepared clouds `x` (B, n, 3): points per voxel of the camera's window (y as wide as x), blurred, at most 1."
+    ("(B, 1, size, size, size) grids (z, y, x) of prepared clouds `x` (B, n, 3): points per voxel of the camera's "
+     "window (y as wide as x), blurred, at most 1.")
     from treebook.scan import WINDOW
     x0, x1, z0, z1 = WINDOW
     lo, hi = torch.tensor([x0, x0, z0], device=x.device), torch.tensor([x1, x1, z1], device=x.device)
-    i = ((x - lo) / (hi - lo) * size).long().clamp(0, size - 1)                                    # (B, n, 3) voxel of each point
+    # (B, n, 3) voxel of each point
+    i = ((x - lo) / (hi - lo) * size).long().clamp(0, size - 1)
     flat = (i[..., 2] * size + i[..., 1]) * size + i[..., 0]
-    g = torch.zeros(x.shape[0], size ** 3, device=x.device).scatter_add_(1, flat, torch.ones(flat.shape, device=x.device)).view(-1, 1, size, size, size)
+    g = torch.zeros(x.shape[0], size ** 3, device=x.device).scatter_add_(1, flat,
+                                                                         torch.ones(flat.shape, device=x.device)).view(-1, 1, size, size, size)
     return F.avg_pool3d(g, 3, 1, 1).mul(27 / 4).clamp(max=1.0)
 
 @contextmanager
 def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
-    "Within the block, `decoder` adds the `glimpse` of image `maps` to every token's embedding (tokens must come in order)."
+    ("Within the block, `decoder` adds the `glimpse` of image `maps` to every token's embedding (tokens must come in "
+     "order).")
     if glimpse is None: yield decoder; return
     state = {"next": 0, "carry": None}
     def add(x, idx, start):
-        if start and start != state["next"]: raise TreebookError(f"the glimpse reads tokens in order: expected position {state['next']}, got {start}")
+        if start and start != state["next"]:
+            raise TreebookError(f"the glimpse reads tokens in order: expected position {state['next']}, got {start}")
         g, carry = glimpse(maps, idx, start, state["carry"] if start else None)
         state.update(next=start + idx.shape[1], carry=carry)
         return x + g
@@ -354,7 +388,8 @@ def save_conditional(model: ConditionalTree, tok: Tokenizer, path, **meta) -> Pa
     "Write a conditional model to `path` (.pt) and its tokenizer to `path` with .tok.json, atomically."
     path = Path(path)
     ck = {"format": "treebook.conditional", "version": COND_VERSION, "kind": model.kind, "n_queries": model.n_queries,
-          "heads": model.heads, "broadcast": model.broadcast, "glimpse": model.glimpse is not None, "config": asdict(model.decoder.config),
+          "heads": model.heads, "broadcast": model.broadcast, "glimpse": model.glimpse is not None,
+          "config": asdict(model.decoder.config),
           "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()}, "meta": meta}
     tok.save(path.with_suffix(".tok.json"))
     return _atomic_write(path, lambda f: torch.save(ck, f))
@@ -368,16 +403,21 @@ def load_conditional(model="elm-image"):
         p = WEIGHTS / f"{model}.pt"
         if not p.is_file():
             names = sorted(q.stem for q in WEIGHTS.glob("elm-*.pt"))
-            raise TreebookError(f"no shipped conditional model called {model!r} ({', '.join(names) or 'none shipped'}): "
+            raise TreebookError(f"no shipped conditional model called {model!r} "
+                                f"({', '.join(names) or 'none shipped'}): "
                                 "train one with scripts/train_conditions.py or give a .pt path")
     if not p.is_file(): raise TreebookError(f"checkpoint {p} does not exist")
     try: ck = torch.load(p, map_location="cpu", weights_only=True)
-    except Exception as e: raise TreebookError(f"cannot read {p} ({type(e).__name__}): it is truncated or not a checkpoint") from None
-    if not isinstance(ck, dict) or ck.get("format") != "treebook.conditional": raise TreebookError(f"{p} is not a treebook conditional checkpoint")
-    if ck.get("version") != COND_VERSION: raise TreebookError(f"{p} has version {ck.get('version')}; this treebook reads {COND_VERSION}")
+    except Exception as e:
+        raise TreebookError(f"cannot read {p} ({type(e).__name__}): it is truncated or not a checkpoint") from None
+    if not isinstance(ck, dict) or ck.get("format") != "treebook.conditional":
+        raise TreebookError(f"{p} is not a treebook conditional checkpoint")
+    if ck.get("version") != COND_VERSION:
+        raise TreebookError(f"{p} has version {ck.get('version')}; this treebook reads {COND_VERSION}")
     tp = p.with_suffix(".tok.json")
     if not tp.is_file(): raise TreebookError(f"no tokenizer beside {p}: expected {tp.name}")
-    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"], ck.get("broadcast", False),
+    m = ConditionalTree(ck["kind"], TreeTransformer(ModelConfig(**ck["config"])), ck["n_queries"], ck["heads"],
+                        ck.get("broadcast", False),
                         ck.get("glimpse", False))
     m.load_state_dict(ck["state_dict"])
     return m.eval(), Tokenizer.load(tp)
@@ -390,12 +430,14 @@ def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: floa
     net.eval()
     x, mask = _batch_cond(net.kind, [cond])
     with net.conditioned(x, mask) as (prefix, bias):
-        seqs = generate(net.decoder, n, tok=tok, prefix=prefix, bias=bias, temperature=temperature, top_p=top_p, top_k=top_k,
+        seqs = generate(net.decoder, n, tok=tok, prefix=prefix, bias=bias, temperature=temperature, top_p=top_p,
+                        top_k=top_k,
                         seed=seed, progress=progress)
     return [tok.decode(s) for s in seqs]
 
 # %% ../nbs/10a_condition.ipynb #f499f10d
-def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool = False, candidates: int = 1, **kw) -> list:
+def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool = False, candidates: int = 1,
+                  **kw) -> list:
     """`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file). With `candidates` > 1 each
     tree is the best of that many samples by silhouette IoU; with `fit` its branch ends are moved onto the silhouette
     (`fit_silhouette`, below)."""
@@ -403,15 +445,18 @@ def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool
     trees = sample_conditional(model, image_input(image), n * candidates, seed, **kw)
     return _choose(trees, n, candidates, fit, lambda: silhouette_target(image))
 
-def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", fit: bool = False, candidates: int = 1, **kw) -> list:
+def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", fit: bool = False, candidates: int = 1,
+                   **kw) -> list:
     """`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them.
     `fit` and `candidates` as for `image_to_tree`, with the strokes (`sketch_target`) as the outline to match."""
     _check_candidates(candidates)
     q = sketch_input(read_lines(lines))
-    return _choose(sample_conditional(model, q, n * candidates, seed, **kw), n, candidates, fit, lambda: sketch_target(q))
+    return _choose(sample_conditional(model, q, n * candidates, seed, **kw), n, candidates, fit,
+                   lambda: sketch_target(q))
 
 def _check_candidates(candidates):
-    if not isinstance(candidates, (int, np.integer)) or candidates < 1: raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
+    if not isinstance(candidates, (int, np.integer)) or candidates < 1:
+        raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
 
 def _choose(trees, n, candidates, fit, target):
     "Of each run of `candidates` trees the best by outline (fitted first if `fit`); `target()` makes the mask."
@@ -431,10 +476,13 @@ def silhouette_scores(pred, target) -> dict:
     if p.shape != t.shape: raise TreebookError(f"masks of different shapes: {p.shape} and {t.shape}")
     tp = float((p & t).sum())
     prec = tp / max(p.sum(), 1); rec = tp / max(t.sum(), 1)
-    return {"iou": tp / max((p | t).sum(), 1), "precision": prec, "recall": rec, "f1": 2 * prec * rec / max(prec + rec, 1e-12)}
+    return {"iou": tp / max((p | t).sum(), 1), "precision": prec, "recall": rec, "f1": 2 * prec
+            * rec / max(prec + rec, 1e-12)}
 
-def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool = False, candidates: int = 1, **kw) -> dict:
-    "Mean silhouette IoU / precision / recall / F1 of image-to-tree on held-out canonical `trees` (`fit`, `candidates`: see `image_to_tree`)."
+def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool = False, candidates: int = 1,
+                   **kw) -> dict:
+    ("Mean silhouette IoU / precision / recall / F1 of image-to-tree on held-out canonical `trees` (`fit`, "
+     "`candidates`: see `image_to_tree`).")
     from treebook.scan import silhouette
     rows = []
     for i, t in enumerate(tqdm(trees, desc="image to tree", disable=not progress)):
@@ -443,7 +491,8 @@ def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 
 def evaluate_points(model, trees, baseline=None, seed: int = 0, progress: bool = True, **kw) -> dict:
-    "Mean Chamfer distance input points <-> generated surface for points-to-tree and (if given) an unconditional (net, tok) baseline."
+    ("Mean Chamfer distance input points <-> generated surface for points-to-tree and (if given) an unconditional "
+     "(net, tok) baseline.")
     from treebook.metrics import chamfer, sample_surface
     out = {"points_to_tree": [], "unconditional": []}
     for i, t in enumerate(tqdm(trees, desc="points to tree", disable=not progress)):
@@ -460,25 +509,29 @@ def evaluate_points(model, trees, baseline=None, seed: int = 0, progress: bool =
 
 # %% ../nbs/10a_condition.ipynb #78931f49
 def _pulls(P, dist, row, col, max_px):
-    "(m, 2) x/z moves that take each node of `P` (m, 3) seen outside the mask to its nearest mask pixel, if within `max_px`."
+    ("(m, 2) x/z moves that take each node of `P` (m, 3) seen outside the mask to its nearest mask pixel, if within "
+     "`max_px`.")
     from treebook.scan import WINDOW, _to_px
     size = dist.shape[0]; x0, x1, z0, z1 = WINDOW
     uv = _to_px(P[:, [0, 2]], size)
-    seen = ((uv >= 0) & (uv < size)).all(1)                      # nodes outside the picture are not the image's to judge
+    # nodes outside the picture are not the image's to judge
+    seen = ((uv >= 0) & (uv < size)).all(1)
     c = np.clip(np.floor(uv).astype(int), 0, size - 1)
     go = seen & (dist[c[:, 1], c[:, 0]] > 0) & (dist[c[:, 1], c[:, 0]] <= max_px)
     r, k = row[c[:, 1], c[:, 0]], col[c[:, 1], c[:, 0]]
     to = np.column_stack([x0 + (k + 0.5) / size * (x1 - x0), z1 - (r + 0.5) / size * (z1 - z0)])
     return np.where(go[:, None], to - P[:, [0, 2]], 0.0)
 
-def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_px: float = 4, max_px: float = 40) -> Tree:
+def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_px: float = 4,
+                   max_px: float = 40) -> Tree:
     """`tree` pulled in x and z onto the mask `target` (in the frame of `scan.silhouette`); depth, radii and topology kept.
     Each of `steps` rounds pulls every node the camera sees outside the mask (and within `max_px` pixels of it) towards its
     nearest mask pixel, smooths the pulls along the tree and moves the nodes `rate` of the way; a last step puts the nodes
     within `snap_px` pixels of the mask onto it."""
     from scipy import ndimage
     m = np.asarray(target) > 0
-    if m.ndim != 2 or m.shape[0] != m.shape[1]: raise TreebookError(f"the silhouette must be a square mask, got shape {m.shape}")
+    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+        raise TreebookError(f"the silhouette must be a square mask, got shape {m.shape}")
     if not m.any(): raise TreebookError("the silhouette is empty: there is nothing to fit the tree to")
     for name, v in (("max_px", max_px), ("snap_px", snap_px), ("rate", rate)):
         if not np.isfinite(v) or v < 0: raise TreebookError(f"{name} must be a number >= 0, got {v!r}")
@@ -505,7 +558,8 @@ def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_
     return Tree(start, end, tree.parent, **tree.attrs)
 
 def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> tuple:
-    "(tree, scores): of `trees` (each fitted first if `fit`), the one whose silhouette has the highest IoU with the mask `target`."
+    ("(tree, scores): of `trees` (each fitted first if `fit`), the one whose silhouette has the highest IoU with the "
+     "mask `target`.")
     from treebook.scan import silhouette
     m = np.asarray(target) > 0
     best = None
@@ -521,7 +575,8 @@ def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> t
 
 # %% ../nbs/10a_condition.ipynb #60eedd5e
 def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image", candidates: int = 4) -> list:
-    "Write image_to_tree.png (input | the network's tree | fitted, best of `candidates`) and the fitted tree as .npz into `out_dir`."
+    ("Write image_to_tree.png (input | the network's tree | fitted, best of `candidates`) and the fitted tree as .npz "
+     "into `out_dir`.")
     from PIL import Image
     from treebook.botany import grow
     from treebook.scan import silhouette
@@ -534,6 +589,7 @@ def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image", candidates: in
     s0 = silhouette_scores(silhouette(raw[0]) if raw[0].n else np.zeros_like(im), im)
     pics = [Image.fromarray(255 - silhouette(x)) if x.n else Image.new("L", im.shape[::-1], 255) for x in (raw[0], g)]
     grid = image_grid([Image.fromarray(255 - im)] + pics,
-                      labels=["input silhouette", f"network, IoU {s0['iou']:.2f}", f"fitted, best of {candidates}, IoU {s['iou']:.2f}"])
+                      labels=["input silhouette", f"network, IoU {s0['iou']:.2f}",
+                              f"fitted, best of {candidates}, IoU {s['iou']:.2f}"])
     paths = [g.save(out / "image_to_tree.npz")] if g.n else []
     return paths + [_atomic_write(out / "image_to_tree.png", lambda f: grid.save(f, format="png"))]

@@ -133,7 +133,8 @@ def generate_dataset(species, n: int, out, max_branches: int | None = None, stag
         if old.get("config") != config:
             diff = sorted(k for k in config if old.get("config", {}).get(k) != config[k])
             raise TreebookError(
-                f"{out} holds a dataset made with other parameters ({', '.join(diff)}): use another folder, or the same parameters to resume"
+                f"{out} holds a dataset made with other parameters ({', '.join(diff)}): use another folder, or the "
+                                f"same parameters to resume"
             )
     for p in out.glob(".*.part"): p.unlink()  # leftovers of an interrupted write
     seeds = [tree_seed(seed, i) for i in range(n)]

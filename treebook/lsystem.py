@@ -41,7 +41,8 @@ def _join_components(p, a, b, w):
         a, b, w = np.concatenate([a, ea]), np.concatenate([b, eb]), np.concatenate([w, ew])
 
 def _mst_nodes(p, k, root=None):
-    "(nodes, node parents) of the minimum spanning tree of the k-NN graph of `p`, rooted at node `root` (default the lowest), parents first."
+    ("(nodes, node parents) of the minimum spanning tree of the k-NN graph of `p`, rooted at node `root` (default the "
+     "lowest), parents first.")
     a, b, w = _join_components(p, *_knn_graph(p, k))
     m = len(p)
     t = minimum_spanning_tree(coo_matrix((w + 1e-12, (a, b)), shape=(m, m)).tocsr())
@@ -53,7 +54,8 @@ def _mst_nodes(p, k, root=None):
     return p[order], par
 
 def tree_nodes(tree: Tree):
-    "(nodes (m, 3), node parents (m,)) of a tree with one root point: node 0 is the root, node i + 1 the end of branch i."
+    ("(nodes (m, 3), node parents (m,)) of a tree with one root point: node 0 is the root, node i + 1 the end of "
+     "branch i.")
     p = np.concatenate([tree.start[:1, :3], tree.end[:, :3]]).astype(np.float64)
     return p, np.concatenate([[-1], tree.parent + 1]).astype(np.int64)
 
@@ -70,8 +72,10 @@ def nodes_tree(p, par, trunk_radius: float | None = None, tip: float | None = No
         tip = trunk_radius / n_leaves ** (1 / exponent) if trunk_radius and np.isfinite(trunk_radius) else 0.25 * float(np.median(tree.lengths))
     return tree.with_pipe_radii(tip=max(tip, 1e-6), exponent=exponent)
 
-def mst_tree(nodes, k: int = 8, trunk_radius: float | None = None, tip: float | None = None, exponent: float = 2.5) -> Tree:
-    "One connected `Tree` through `nodes` (m, 3): minimum spanning tree of the k-NN graph, rooted at the lowest node, pipe-model radii."
+def mst_tree(nodes, k: int = 8, trunk_radius: float | None = None, tip: float | None = None,
+             exponent: float = 2.5) -> Tree:
+    ("One connected `Tree` through `nodes` (m, 3): minimum spanning tree of the k-NN graph, rooted at the lowest node, "
+     "pipe-model radii.")
     p = np.asarray(nodes, np.float64)
     if p.ndim != 2 or p.shape[1] != 3: raise TreebookError(f"nodes must have shape (m, 3), got {p.shape}")
     p = np.unique(p, axis=0)
@@ -83,8 +87,10 @@ __all__ = ['GRAMMAR_VERSION', 'tree_nodes', 'nodes_tree', 'mst_tree', 'simplify'
            'grammar_from_trees', 'derive', 'grow', 'perturb', 'axiom_tree', 'propagate', 'skeleton_points', 'chamfer']
 
 # %% ../nbs/08a_lsystem.ipynb #5b6144f9
-def simplify(p, par, h: float, spur: float = 1.5, smooth: int = 3, alpha: float = 0.5, angle: float = 25.0, max_len: float = 4.0):
-    "(nodes, parents) of the tree (`p`, `par`) with spurs under `spur` voxels (edge `h`) pruned, unbranched runs smoothed and nearly collinear internodes merged."
+def simplify(p, par, h: float, spur: float = 1.5, smooth: int = 3, alpha: float = 0.5, angle: float = 25.0,
+             max_len: float = 4.0):
+    ("(nodes, parents) of the tree (`p`, `par`) with spurs under `spur` voxels (edge `h`) pruned, unbranched runs "
+     "smoothed and nearly collinear internodes merged.")
     p = np.asarray(p, np.float64).copy(); par = np.asarray(par, np.int64).copy()
     if h <= 0: raise TreebookError(f"the voxel edge h must be > 0, got {h}")
     def compact(keep, newpar):
@@ -142,7 +148,8 @@ def _seg_dist(p, a, b):
     return np.linalg.norm(a + t[..., None] * ab - p, axis=-1)
 
 def productions(coarse: Tree, fine: Tree, h: float, k: int = 6) -> dict:
-    "Productions from `coarse` vectors to the `fine` vectors they own, in parent turtle frames, lengths in units of `h`."
+    ("Productions from `coarse` vectors to the `fine` vectors they own, in parent turtle frames, lengths in units of "
+     "`h`.")
     ps, pe = coarse.start[:, :3].astype(np.float64), coarse.end[:, :3].astype(np.float64)
     cs, ce = fine.start[:, :3].astype(np.float64), fine.end[:, :3].astype(np.float64)
     kk = min(k, len(ps))
@@ -167,7 +174,8 @@ def productions(coarse: Tree, fine: Tree, h: float, k: int = 6) -> dict:
     link = np.where(same, pos[np.maximum(fp, 0)] - first[owner], -1)
     H = R[:, :, 0]; cp = coarse.parent
     rel = np.where(cp >= 0, (H * H[np.maximum(cp, 0)]).sum(1), 1.0)
-    return {"heading": H[rules], "length": lens[rules] / h, "rel": rel[rules], "ptr": ptr, "offset": off, "vector": vec, "link": link}
+    return {"heading": H[rules], "length": lens[rules] / h, "rel": rel[rules], "ptr": ptr, "offset": off,
+            "vector": vec, "link": link}
 
 # %% ../nbs/08a_lsystem.ipynb #076dcf96
 GRAMMAR_VERSION = 2   # 2: child links, parent straightness, axiom topology
@@ -226,7 +234,8 @@ class Grammar:
     def turtle(self, i: int) -> str:
         "Production `i` in bracketed turtle notation (lengths in the parent level's voxels)."
         if not 0 <= i < self.n_rules: raise TreebookError(f"rule index must be in 0..{self.n_rules - 1}, got {i}")
-        head = f"A{self.rule_level[i]}(l={self.length[i]:.2f}, H=({self.heading[i][0]:+.2f},{self.heading[i][1]:+.2f},{self.heading[i][2]:+.2f}))"
+        head = (f"A{self.rule_level[i]}(l={self.length[i]:.2f}, "
+                f"H=({self.heading[i][0]:+.2f},{self.heading[i][1]:+.2f},{self.heading[i][2]:+.2f}))")
         body = []
         for o, v in zip(self.offset[self.ptr[i]:self.ptr[i + 1]], self.vector[self.ptr[i]:self.ptr[i + 1]]):
             s = "["
@@ -243,7 +252,8 @@ class Grammar:
                 f"axiom: {len(self.axiom_start)} vectors of dyad {self.axiom_level}, {len(self.offset)} child vectors)")
 
     def to_dict(self) -> dict:
-        return {"format": "treebook.grammar", "format_version": GRAMMAR_VERSION, "levels": [int(j) for j in self.levels],
+        return {"format": "treebook.grammar", "format_version": GRAMMAR_VERSION,
+                "levels": [int(j) for j in self.levels],
                 "h": {str(j): float(v) for j, v in self.h.items()}, "origin": [float(v) for v in self.origin],
                 "axiom_level": int(self.axiom_level), "axiom_start": np.round(self.axiom_start, 6).tolist(),
                 "axiom_end": np.round(self.axiom_end, 6).tolist(), "trunk_radius": float(self.trunk_radius),
@@ -258,13 +268,15 @@ class Grammar:
         "Write the grammar as JSON (atomically); the first 50 productions are also written in turtle notation."
         path = Path(path)
         if path.suffix.lower() != ".json": raise TreebookError(f"a grammar is saved as .json, got {path.name!r}")
-        text = json.dumps(_json_safe(self.to_dict()), allow_nan=False)   # NaN (no trunk radius) as null: JSON has no NaN
+        # NaN (no trunk radius) as null: JSON has no NaN
+        text = json.dumps(_json_safe(self.to_dict()), allow_nan=False)
         return _atomic_write(path, lambda f: f.write(text.encode()))
 
     @classmethod
     def load(cls, path) -> "Grammar":
         "Read a grammar written by `Grammar.save`."
-        d = read_json(path, "treebook.grammar", GRAMMAR_VERSION, "grammar", hint=" (run `treebook grammar SCAN` to make one)")
+        d = read_json(path, "treebook.grammar", GRAMMAR_VERSION, "grammar",
+                      hint=" (run `treebook grammar SCAN` to make one)")
         try:
             r = d["rules"]
             g = cls(levels=list(d["levels"]), h={int(k): float(v) for k, v in d["h"].items()}, origin=list(d["origin"]),
@@ -272,10 +284,13 @@ class Grammar:
                     axiom_end=np.array(d["axiom_end"], float).reshape(-1, 3), rule_level=np.array(r["level"], np.int64),
                     heading=np.array(r["heading"], float).reshape(-1, 3), length=np.array(r["length"], float),
                     ptr=np.array(r["ptr"], np.int64), offset=np.array(r["offset"], float).reshape(-1, 3),
-                    vector=np.array(r["vector"], float).reshape(-1, 3), trunk_radius=float("nan") if d.get("trunk_radius") is None else float(d["trunk_radius"]), meta=d.get("meta", {}),
-                    link=np.array(r["link"], np.int64) if "link" in r else None, rel=np.array(r["rel"], float) if "rel" in r else None,
+                    vector=np.array(r["vector"], float).reshape(-1, 3), trunk_radius=float("nan")
+                    if d.get("trunk_radius") is None else float(d["trunk_radius"]), meta=d.get("meta", {}),
+                    link=np.array(r["link"], np.int64) if "link" in r else None, rel=np.array(r["rel"], float)
+                    if "rel" in r else None,
                     axiom_parent=np.array(d["axiom_parent"], np.int64) if d.get("axiom_parent") is not None else None)
-        except (KeyError, TypeError, ValueError) as e: raise TreebookError(f"{path} is not a complete grammar ({type(e).__name__}: {e})") from None
+        except (KeyError, TypeError, ValueError) as e:
+            raise TreebookError(f"{path} is not a complete grammar ({type(e).__name__}: {e})") from None
         if len(g.ptr) != g.n_rules + 1 or g.ptr[-1] != len(g.offset) or len(g.axiom_start) < 1 or len(g.link) != len(g.offset) or len(g.rel) != g.n_rules:
             raise TreebookError(f"{path} is inconsistent: rule and child counts do not match")
         return g
@@ -284,9 +299,11 @@ def grammar_from_trees(trees: dict, h: dict, origin, axiom_level=None, trunk_rad
     "A `Grammar` from dyad trees {level: Tree} with voxel edges {level: h}: productions between consecutive levels."
     levels = sorted(trees)
     if len(levels) < 2: raise TreebookError("a grammar needs trees at two or more dyad levels; use a finer grid")
-    if axiom_level is None:   # two levels above the finest (a quarter of its resolution), unless that is too bare to be a tree
+    # two levels above the finest (a quarter of its resolution), unless that is too bare to be a tree
+    if axiom_level is None:
         axiom_level = levels[-3] if len(levels) >= 3 and trees[levels[-3]].n >= 24 else next((j for j in levels[:-1] if trees[j].n >= 24), levels[-2])
-    if axiom_level not in trees or axiom_level == levels[-1]: raise TreebookError(f"axiom level must be one of {levels[:-1]}, got {axiom_level}")
+    if axiom_level not in trees or axiom_level == levels[-1]:
+        raise TreebookError(f"axiom level must be one of {levels[:-1]}, got {axiom_level}")
     parts = []
     for j, j1 in zip(levels, levels[1:]):
         if j1 != j + 1: continue
@@ -295,22 +312,27 @@ def grammar_from_trees(trees: dict, h: dict, origin, axiom_level=None, trunk_rad
     ptr, base = [0], 0
     for pr in parts: ptr += (pr["ptr"][1:] + base).tolist(); base += pr["ptr"][-1]
     ax = trees[axiom_level]
-    return Grammar(levels=levels, h={int(j): float(h[j]) for j in levels}, origin=[float(v) for v in origin], axiom_level=int(axiom_level),
+    return Grammar(levels=levels, h={int(j): float(h[j]) for j in levels}, origin=[float(v) for v in origin],
+                   axiom_level=int(axiom_level),
                    axiom_start=ax.start[:, :3].astype(float), axiom_end=ax.end[:, :3].astype(float),
-                   rule_level=np.concatenate([p["level"] for p in parts]), heading=np.concatenate([p["heading"] for p in parts]),
+                   rule_level=np.concatenate([p["level"] for p in parts]),
+                   heading=np.concatenate([p["heading"] for p in parts]),
                    length=np.concatenate([p["length"] for p in parts]), ptr=np.array(ptr, np.int64),
-                   offset=np.concatenate([p["offset"] for p in parts]), vector=np.concatenate([p["vector"] for p in parts]),
+                   offset=np.concatenate([p["offset"] for p in parts]),
+                   vector=np.concatenate([p["vector"] for p in parts]),
                    link=np.concatenate([p["link"] for p in parts]), rel=np.concatenate([p["rel"] for p in parts]),
                    axiom_parent=ax.parent.astype(np.int64), trunk_radius=float(trunk_radius), meta=dict(meta or {}))
 
 # %% ../nbs/08a_lsystem.ipynb #b50dff20
 def _rule_index(g: Grammar):
     if "_kd" not in g.__dict__:
-        g.__dict__["_kd"] = cKDTree(np.column_stack([g.heading, np.log(np.maximum(g.length, 1e-3)), 0.5 * g.rel, 0.25 * g.rule_level]))
+        g.__dict__["_kd"] = cKDTree(np.column_stack([g.heading, np.log(np.maximum(g.length, 1e-3)), 0.5 * g.rel, 0.25
+                                                     * g.rule_level]))
     return g.__dict__["_kd"]
 
 def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
-    "(nodes (m, 3), node parents (m,)) of the tree one level finer: one stochastic production applied to every branch of `tree` (at `level`)."
+    ("(nodes (m, 3), node parents (m,)) of the tree one level finer: one stochastic production applied to every branch "
+     "of `tree` (at `level`).")
     rng = np.random.default_rng(seed)
     h = g.voxel(level)
     p, par = tree_nodes(tree)
@@ -319,7 +341,8 @@ def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
     d = np.where(ln[:, None] > 1e-9, d, [0.0, 0.0, 1.0])
     R = frames(d); H = R[:, :, 0]; bp = tree.parent
     rel = np.where(bp >= 0, (H * H[np.maximum(bp, 0)]).sum(1), 1.0)
-    q = np.column_stack([H, np.log(np.maximum(ln / h, 1e-3)), 0.5 * rel, np.full(len(ln), 0.25 * min(level, g.finest - 1))])
+    q = np.column_stack([H, np.log(np.maximum(ln / h, 1e-3)), 0.5 * rel,
+                         np.full(len(ln), 0.25 * min(level, g.finest - 1))])
     kk = min(k, g.n_rules)
     dist, cand = _rule_index(g).query(q, k=kk)
     dist, cand = dist.reshape(len(q), kk), cand.reshape(len(q), kk)
@@ -348,7 +371,8 @@ def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
             end = np.clip(P[a] + vw[r], lo[b], hi[b])
             if ((end - P[a]) ** 2).sum() < 1e-18: node_of[r] = a; continue
             P[m] = end; out_par.append(a); node_of[r] = m; mine.append(m); m += 1
-        if mine:                                    # the production spans its vector: stretch a short one along H (at most 1.5x)
+        # the production spans its vector: stretch a short one along H (at most 1.5x)
+        if mine:
             ix = np.array(mine); tp = (P[ix] - s[b]) @ H[b]; tmax = tp.max()
             if 1e-9 < tmax < ln[b]: P[ix] += np.outer(tp * (min(ln[b] / tmax, 1.5) - 1), H[b])
         made[b] = mine if mine else base
@@ -362,7 +386,8 @@ def grow(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4) -> Tree:
     return nodes_tree(p, par, trunk_radius=g.trunk_radius)
 
 def perturb(tree: Tree, angle: float = 10.0, seed=0, trunk_radius=None) -> Tree:
-    "`tree` with every limb (a branch that is not its parent's main continuation) turned about its base by a random angle (normal, `angle` degrees)."
+    ("`tree` with every limb (a branch that is not its parent's main continuation) turned about its base by a random "
+     "angle (normal, `angle` degrees).")
     if angle < 0: raise TreebookError(f"angle must be >= 0 degrees, got {angle}")
     rng = np.random.default_rng(seed)
     p, par = tree_nodes(tree); m = len(p)
@@ -385,19 +410,23 @@ def perturb(tree: Tree, angle: float = 10.0, seed=0, trunk_radius=None) -> Tree:
     return nodes_tree(out, par, trunk_radius=trunk_radius)
 
 def axiom_tree(g: Grammar) -> Tree:
-    "The axiom as a `Tree` (its stored topology; grammars saved before version 2 are re-linked by a minimum spanning tree)."
+    ("The axiom as a `Tree` (its stored topology; grammars saved before version 2 are re-linked by a minimum spanning "
+     "tree).")
     if g.axiom_parent is None or len(g.axiom_parent) != len(g.axiom_start):
         return mst_tree(np.unique(np.concatenate([g.axiom_start, g.axiom_end]), axis=0), trunk_radius=g.trunk_radius)
-    s = np.column_stack([g.axiom_start, np.zeros(len(g.axiom_start))]); e = np.column_stack([g.axiom_end, np.zeros(len(g.axiom_end))])
+    s = np.column_stack([g.axiom_start, np.zeros(len(g.axiom_start))])
+    e = np.column_stack([g.axiom_end, np.zeros(len(g.axiom_end))])
     return Tree(s, e, g.axiom_parent, check=False).with_pipe_radii(tip=1e-3)
 
 def propagate(g: Grammar, n: int = 5, seed: int = 0, jitter: float = 10.0, k: int = 4, to_level=None) -> list:
-    "`n` new trees like the scanned one: turn the axiom's limbs by about `jitter` degrees (halving each level), grow level by level with random rule choices."
+    ("`n` new trees like the scanned one: turn the axiom's limbs by about `jitter` degrees (halving each level), grow "
+     "level by level with random rule choices.")
     if isinstance(g, (str, Path)): g = Grammar.load(g)
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
     if jitter < 0: raise TreebookError(f"jitter must be >= 0 degrees, got {jitter}")
     to_level = g.finest if to_level is None else int(to_level)
-    if to_level < g.axiom_level: raise TreebookError(f"to_level must be >= the axiom level {g.axiom_level}, got {to_level}")
+    if to_level < g.axiom_level:
+        raise TreebookError(f"to_level must be >= the axiom level {g.axiom_level}, got {to_level}")
     ax = axiom_tree(g)
     out = []
     for child in np.random.SeedSequence(seed).spawn(n):
@@ -411,7 +440,8 @@ def propagate(g: Grammar, n: int = 5, seed: int = 0, jitter: float = 10.0, k: in
 
 # %% ../nbs/08a_lsystem.ipynb #7b08ff53
 def skeleton_points(tree: Tree, n: int = 4000) -> np.ndarray:
-    "About `n` points spread evenly by length along the branches of `tree`, root at the origin, divided by the tree's height."
+    ("About `n` points spread evenly by length along the branches of `tree`, root at the origin, divided by the tree's "
+     "height.")
     if tree.n < 1: raise TreebookError("the tree has no branches to sample")
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
     L = np.linalg.norm(e - s, axis=1); step = max(L.sum() / n, 1e-12)
@@ -421,6 +451,7 @@ def skeleton_points(tree: Tree, n: int = 4000) -> np.ndarray:
     return q / max(float(np.ptp(np.concatenate([s[:, 2], e[:, 2]]))), 1e-12)
 
 def chamfer(a: Tree, b: Tree, n: int = 4000) -> float:
-    "Symmetric Chamfer distance between the skeletons of `a` and `b`, each rooted at the origin and divided by its height."
+    ("Symmetric Chamfer distance between the skeletons of `a` and `b`, each rooted at the origin and divided by its "
+     "height.")
     A, B = skeleton_points(a, n), skeleton_points(b, n)
     return 0.5 * float(cKDTree(B).query(A)[0].mean() + cKDTree(A).query(B)[0].mean())

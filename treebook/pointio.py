@@ -21,21 +21,27 @@ def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.n
     "`p` as a float64 (n, 3) array of usable points, or a `TreebookError` naming what is wrong."
     if np.asarray(p).dtype.kind == "c": raise TreebookError(f"{name} holds complex numbers; points are real x, y, z")
     try: p = np.asarray(p, dtype=np.float64)
-    except (TypeError, ValueError) as e: raise TreebookError(f"{name} must be numbers: {str(e).splitlines()[0][:80]}") from None
+    except (TypeError, ValueError) as e:
+        raise TreebookError(f"{name} must be numbers: {str(e).splitlines()[0][:80]}") from None
     if p.ndim != 2 or p.shape[1] < 3: raise TreebookError(f"{name} must have shape (n, 3) for x, y, z; got {p.shape}")
     p = p[:, :3]
     if len(p) == 0: raise TreebookError(f"{name} is empty: it has no points")
     if len(p) < min_points: raise TreebookError(f"{name} has only {len(p)} points; a tree needs at least {min_points}")
     bad = np.flatnonzero(~np.isfinite(p).all(1))
-    if len(bad): raise TreebookError(f"{name} has {len(bad)} point(s) with NaN or infinity (first: point {bad[0]}, {p[bad[0]].tolist()}); remove them")
-    if np.ptp(p, 0).max() <= 0: raise TreebookError(f"all {len(p)} points of {name} are identical: there is no shape to read")
+    if len(bad):
+        raise TreebookError(f"{name} has {len(bad)} point(s) with NaN or infinity (first: point {bad[0]}, "
+                            f"{p[bad[0]].tolist()}); remove them")
+    if np.ptp(p, 0).max() <= 0:
+        raise TreebookError(f"all {len(p)} points of {name} are identical: there is no shape to read")
     q = p - p.mean(0)
     ev = np.linalg.eigvalsh(q.T @ q)   # spread along the three principal axes, squared, smallest first
-    if ev[1] <= 1e-12 * ev[2]: raise TreebookError(f"all {len(p)} points of {name} lie on one line: there is no tree to read")
+    if ev[1] <= 1e-12 * ev[2]:
+        raise TreebookError(f"all {len(p)} points of {name} lie on one line: there is no tree to read")
     return p
 
 def _fields(line: str) -> tuple:
-    "(delimiter for `np.loadtxt`, decimal comma?, fields) of one line of a text scan: ';', ',', tab or spaces; '1,5;2,5;3,5' has decimal commas."
+    ("(delimiter for `np.loadtxt`, decimal comma?, fields) of one line of a text scan: ';', ',', tab or spaces; "
+     "'1,5;2,5;3,5' has decimal commas.")
     if ";" in line: d = ";"
     elif "," in line: d = ","
     else: d = None
@@ -48,7 +54,8 @@ def _is_number(s: str) -> bool:
     except ValueError: return False
 
 def _read_text(path: Path, look: int = 50) -> np.ndarray:
-    "Rows of numbers of a text scan; leading lines that are not points (names of columns, a .pts point count) are skipped."
+    ("Rows of numbers of a text scan; leading lines that are not points (names of columns, a .pts point count) are "
+     "skipped.")
     skip, seen, data = 0, 0, None  # lines before the first point; of those, lines that are not blank or comments
     with open(path, errors="replace") as f:
         for line in f:
@@ -61,7 +68,8 @@ def _read_text(path: Path, look: int = 50) -> np.ndarray:
             skip += 1
     if data is None:
         if not seen: return np.zeros((0, 3))  # blank lines and comments only
-        raise TreebookError(f"cannot read {path} as rows of numbers: none of its first {seen} line(s) is a point; an .xyz file holds one point a line: x y z [more columns]")
+        raise TreebookError(f"cannot read {path} as rows of numbers: none of its first {seen} line(s) is a point; an "
+                            f".xyz file holds one point a line: x y z [more columns]")
     d, comma = data
     src = path
     if comma:  # decimal commas: read the text with points for commas
@@ -71,7 +79,8 @@ def _read_text(path: Path, look: int = 50) -> np.ndarray:
         warnings.simplefilter("ignore")
         try: a = np.loadtxt(src, dtype=np.float64, ndmin=2, comments=("#", "//"), delimiter=d, skiprows=skip)
         except ValueError:
-            raise TreebookError(f"cannot read {path}: {_bad_line(path, skip, d, comma)}; an .xyz file holds one point a line: x y z [more columns]") from None
+            raise TreebookError(f"cannot read {path}: {_bad_line(path, skip, d, comma)}; an .xyz file holds one point "
+                                f"a line: x y z [more columns]") from None
     return a[:, :3]
 
 def _bad_line(path: Path, skip: int, d, comma: bool) -> str:
@@ -90,7 +99,8 @@ def _bad_line(path: Path, skip: int, d, comma: bool) -> str:
 
 @contextmanager
 def _quiet_stderr():
-    "Silence what C libraries (RPly, libE57) print on the process's stderr: the command says what went wrong in one line."
+    ("Silence what C libraries (RPly, libE57) print on the process's stderr: the command says what went wrong in one "
+     "line.")
     fd = 2   # what C code writes to, whatever Python's sys.stderr is
     try: sys.stderr.flush()
     except (AttributeError, ValueError, OSError): pass
@@ -102,9 +112,11 @@ def _quiet_stderr():
     finally: os.dup2(saved, fd); os.close(saved); os.close(null)
 
 def _looks_like(path: Path, magic: tuple, what: str):
-    "A `TreebookError` unless the file starts with one of `magic` (random bytes say 'not a .ply file', not a parser's dump)."
+    ("A `TreebookError` unless the file starts with one of `magic` (random bytes say 'not a .ply file', not a parser's "
+     "dump).")
     with open(path, "rb") as f: head = f.read(64)
-    if not any(head.startswith(m) for m in magic): raise TreebookError(f"{path} is not {what} file (it does not start like one)")
+    if not any(head.startswith(m) for m in magic):
+        raise TreebookError(f"{path} is not {what} file (it does not start like one)")
 
 def _read_o3d(path: Path) -> np.ndarray:
     import open3d as o3d
@@ -116,7 +128,9 @@ def _read_o3d(path: Path) -> np.ndarray:
 def _read_las(path: Path) -> np.ndarray:
     import laspy
     try: las = laspy.read(path)
-    except Exception as e: raise TreebookError(f"cannot read {path} as LAS/LAZ ({type(e).__name__}: {e}); .laz also needs `pip install lazrs`") from None
+    except Exception as e:
+        raise TreebookError(f"cannot read {path} as LAS/LAZ ({type(e).__name__}: {e}); .laz also needs `pip install "
+                            f"lazrs`") from None
     return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
 
 def _read_e57(path: Path) -> np.ndarray:
@@ -140,8 +154,11 @@ def _read_npy(path: Path) -> np.ndarray:
         if "pickle" in str(e): raise TreebookError(f"{path} holds Python objects, not an array of numbers") from None
         raise TreebookError(f"cannot read {path}: it is damaged or incomplete") from None
     except Exception: raise TreebookError(f"cannot read {path}: it is damaged or incomplete") from None
-    if a.ndim != 2 or a.shape[1] < 3: raise TreebookError(f"{path} holds an array of shape {a.shape}; points need shape (n, 3)")
-    if a.dtype.kind not in "biuf": raise TreebookError(f"{path} holds {'complex numbers' if a.dtype.kind == 'c' else a.dtype}; points are real x, y, z")
+    if a.ndim != 2 or a.shape[1] < 3:
+        raise TreebookError(f"{path} holds an array of shape {a.shape}; points need shape (n, 3)")
+    if a.dtype.kind not in "biuf":
+        raise TreebookError(f"{path} holds {'complex numbers' if a.dtype.kind == 'c' else a.dtype}; points are real x, "
+                            f"y, z")
     return a[:, :3].astype(np.float64)
 
 def up_to_z(p: np.ndarray, up: str = "z") -> np.ndarray:
@@ -151,16 +168,20 @@ def up_to_z(p: np.ndarray, up: str = "z") -> np.ndarray:
     raise TreebookError(f"`up` must be 'z' or 'y' (the vertical axis of the file), got {up!r}")
 
 def read_points(src, up: str = "z") -> np.ndarray:
-    "Points of a scan as (n, 3) float64 with z up, from a path (.xyz .txt .pts .csv .ply .pcd .las .laz .e57 .npy) or an array."
+    ("Points of a scan as (n, 3) float64 with z up, from a path (.xyz .txt .pts .csv .ply .pcd .las .laz .e57 .npy) or "
+     "an array.")
     if up not in ("z", "y"): raise TreebookError(f"`up` must be 'z' or 'y' (the vertical axis of the file), got {up!r}")
     if isinstance(src, (str, Path)):
         path = Path(src)
         if not path.exists(): raise TreebookError(f"no such file: {path}")
-        if path.is_dir(): raise TreebookError(f"{path} is a folder; give a point-cloud file ({' '.join(POINT_FORMATS)})")
+        if path.is_dir():
+            raise TreebookError(f"{path} is a folder; give a point-cloud file ({' '.join(POINT_FORMATS)})")
         suf = path.suffix.lower()
-        if suf not in POINT_FORMATS: raise TreebookError(f"cannot read {path.name!r}: expected one of {' '.join(POINT_FORMATS)}")
+        if suf not in POINT_FORMATS:
+            raise TreebookError(f"cannot read {path.name!r}: expected one of {' '.join(POINT_FORMATS)}")
         if path.stat().st_size == 0: raise TreebookError(f"{path} is empty (0 bytes): it has no points")
-        reader = {".ply": _read_o3d, ".pcd": _read_o3d, ".las": _read_las, ".laz": _read_las, ".e57": _read_e57, ".npy": _read_npy}.get(suf, _read_text)
+        reader = {".ply": _read_o3d, ".pcd": _read_o3d, ".las": _read_las, ".laz": _read_las, ".e57": _read_e57,
+                  ".npy": _read_npy}.get(suf, _read_text)
         p, name = reader(path), str(path)
     else: p, name = src, "the point cloud"
     return up_to_z(check_points(p, name), up)

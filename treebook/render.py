@@ -53,12 +53,14 @@ def _scene(obj, colors=None, leaves=False, sides=8):
         elif isinstance(it, trimesh.Trimesh):
             if not len(it.faces): raise TreebookError("cannot render an empty mesh")
             out.append(("mesh", it))
-        elif isinstance(it, trimesh.PointCloud): out.append(("points", np.asarray(it.vertices, float), _colors_for(colors, len(it.vertices))))
+        elif isinstance(it, trimesh.PointCloud):
+            out.append(("points", np.asarray(it.vertices, float), _colors_for(colors, len(it.vertices))))
         else:
             p = np.asarray(it, dtype=np.float64) if not isinstance(it, str) else np.zeros(0)
             if p.ndim != 2 or p.shape[1] != 3 or not len(p):
                 raise TreebookError(
-                    f"render needs a Tree, a mesh or an (m, 3) point array, got {type(it).__name__} {getattr(p, 'shape', '')}"
+                    f"render needs a Tree, a mesh or an (m, 3) point array, got {type(it).__name__} "
+                                    f"{getattr(p, 'shape', '')}"
                 )
             if not np.isfinite(p).all(): raise TreebookError("the points to render hold NaN or infinity")
             out.append(("points", p, _colors_for(colors, len(p))))

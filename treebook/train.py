@@ -75,7 +75,8 @@ def _dist_info():
     return (dist.get_rank(), dist.get_world_size()) if ws > 1 else (0, 1)
 
 def _save_state(path, model, opt, step, epoch, best, config, args, seconds):
-    ckpt = {"format": "treebook.train", "version": 1, "step": step, "epoch": epoch, "best_val": best, "seconds": seconds,
+    ckpt = {"format": "treebook.train", "version": 1, "step": step, "epoch": epoch, "best_val": best,
+            "seconds": seconds,
             "config": asdict(config), "args": args, "model": model.state_dict(), "opt": opt.state_dict()}
     _atomic_write(Path(path), lambda f: torch.save(ckpt, f))
 
@@ -84,7 +85,8 @@ def _load_state(path):
     if not path.is_file(): raise TreebookError(f"cannot resume: {path} does not exist (train without --resume first)")
     try: ckpt = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:
-        raise TreebookError(f"cannot resume from {path}: it is truncated or not a training checkpoint ({type(e).__name__}); "
+        raise TreebookError(f"cannot resume from {path}: it is truncated or not a training checkpoint "
+                            f"({type(e).__name__}); "
                             "delete it and train again without --resume") from None
     if not isinstance(ckpt, dict) or ckpt.get("format") != "treebook.train":
         raise TreebookError(f"{path} is not a treebook training checkpoint")
@@ -118,22 +120,30 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     `rank_weights` makes every process write its final weights to `rank<r>.pt` (to check that they agree)."""
     if order not in ORDERS: raise TreebookError(f"unknown order {order!r}: choose one of {', '.join(ORDERS)}")
     if arch not in ARCHS: raise TreebookError(f"unknown arch {arch!r}: choose one of {', '.join(ARCHS)}")
-    for name, v, need in (("batch_size", batch_size, 1), ("epochs", epochs, 1), ("ckpt_every", ckpt_every, 1), ("log_every", log_every, 1),
-                          ("dim", dim, 1), ("depth", depth, 1), ("heads", heads, 1), ("warmup", warmup, 0), ("val_trees", val_trees, 1),
-                          ("steps", steps, 1), ("val_every", val_every, 1), ("max_train", max_train, 1), ("stop_after", stop_after, 1),
+    for name, v, need in (("batch_size", batch_size, 1), ("epochs", epochs, 1), ("ckpt_every", ckpt_every, 1),
+                          ("log_every", log_every, 1),
+                          ("dim", dim, 1), ("depth", depth, 1), ("heads", heads, 1), ("warmup", warmup, 0),
+                          ("val_trees", val_trees, 1),
+                          ("steps", steps, 1), ("val_every", val_every, 1), ("max_train", max_train, 1),
+                          ("stop_after", stop_after, 1),
                           ("threads", threads, 1)):
         if v is not None and (not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < need):
             raise TreebookError(f"{name} must be a whole number >= {need}, got {v!r}")
-    for name, v, positive in (("lr", lr, True), ("weight_decay", weight_decay, False), ("grad_clip", grad_clip or 0.0, False),
+    for name, v, positive in (("lr", lr, True), ("weight_decay", weight_decay, False),
+                              ("grad_clip", grad_clip or 0.0, False),
                               ("time_limit", time_limit, True)):
         if v is not None and not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
             raise TreebookError(f"{name} must be a finite number {'>' if positive else '>='} 0, got {v!r}")
     data_dir, out_dir = Path(data_dir), Path(out_dir)
-    if not data_dir.is_dir(): raise TreebookError(f"data folder {data_dir} does not exist: make one with generate_dataset / treebook generate")
+    if not data_dir.is_dir():
+        raise TreebookError(f"data folder {data_dir} does not exist: make one with generate_dataset / treebook "
+                            f"generate")
     tok_path, last = out_dir / "tokenizer.json", out_dir / "last.pt"
     out_folder(out_dir)   # checked before any work; made only when every argument is known to be good
-    if resume and not last.is_file(): raise TreebookError(f"nothing to resume: {last} does not exist; start without --resume")
-    if not resume and last.exists(): raise TreebookError(f"{out_dir} already holds a run (last.pt): pass resume=True / --resume, or another --out")
+    if resume and not last.is_file():
+        raise TreebookError(f"nothing to resume: {last} does not exist; start without --resume")
+    if not resume and last.exists():
+        raise TreebookError(f"{out_dir} already holds a run (last.pt): pass resume=True / --resume, or another --out")
     load_manifest(data_dir)
     if threads: torch.set_num_threads(int(threads))
     rank, world = _dist_info()
@@ -144,9 +154,12 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     if not train_set: raise TreebookError(f"the dataset in {data_dir} has no (non-empty) training trees")
     val_set = [t for t in val_set if t.n][:val_trees] or train_set[:min(len(train_set), val_trees)]
     if len(train_set) // world // batch_size < 1:
-        raise TreebookError(f"{len(train_set)} training trees make no batch of {batch_size} per process: lower batch_size")
-    args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads, batch_size=batch_size,
-                world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup, weight_decay=weight_decay, grad_clip=grad_clip,
+        raise TreebookError(f"{len(train_set)} training trees make no batch of {batch_size} per process: lower "
+                            f"batch_size")
+    args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads,
+                batch_size=batch_size,
+                world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup, weight_decay=weight_decay,
+                grad_clip=grad_clip,
                 augment=augment_data, val_trees=len(val_set), max_train=max_train, seed=seed)
     if resume:
         ckpt = _load_state(last)
@@ -167,7 +180,8 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     model = TreeTransformer(config)
     decay = [p for p in model.parameters() if p.dim() >= 2]
     no_decay = [p for p in model.parameters() if p.dim() < 2]
-    opt = torch.optim.AdamW([{"params": decay, "weight_decay": weight_decay}, {"params": no_decay, "weight_decay": 0.0}],
+    opt = torch.optim.AdamW([{"params": decay, "weight_decay": weight_decay},
+                             {"params": no_decay, "weight_decay": 0.0}],
                             lr=lr, betas=(0.9, 0.95))
     step, best = 0, float("inf")
     if resume:
@@ -178,7 +192,8 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     per_epoch = len(sampler) // batch_size
     total = steps or epochs * per_epoch
     net = model
-    if world > 1: net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True)  # e.g. an empty alpha
+    # e.g. an empty alpha
+    if world > 1: net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True)
     val_seqs = tok.encode_batch(val_set, order)
     log_path = out_dir / "log.csv"
     if rank == 0 and not (resume and log_path.exists()):
@@ -187,7 +202,8 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     t0 = time.time()
     def log(row):
         if rank: return
-        with open(log_path, "a") as f: f.write(",".join("" if v is None else f"{v:.6g}" if isinstance(v, float) else str(v) for v in row) + "\n")
+        with open(log_path, "a") as f:
+            f.write(",".join("" if v is None else f"{v:.6g}" if isinstance(v, float) else str(v) for v in row) + "\n")
     def validate(epoch):
         nonlocal best
         if rank: return None
@@ -225,12 +241,15 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
             running.append(float(lv))
             bar.update(1); bar.set_postfix(loss=f"{running[-1]:.3f}")
             if step % log_every == 0:
-                log([step, epoch, lr_at(step - 1, total, lr, warmup), float(np.mean(running)), None, None, time.time() - t0 + elapsed0])
+                log([step, epoch, lr_at(step - 1, total, lr, warmup), float(np.mean(running)), None, None, time.time()
+                     - t0 + elapsed0])
                 running = []
             end_epoch = b == per_epoch - 1
-            if (val_every and step % val_every == 0) or end_epoch or step == total: last_val = validate(epoch) or last_val
+            if (val_every and step % val_every == 0) or end_epoch or step == total:
+                last_val = validate(epoch) or last_val
             if step % ckpt_every == 0 or step == total or end_epoch: checkpoint(epoch)
-            if step >= total or (stop_after and step >= stop_after) or (time_limit and time.time() - t_call > time_limit):
+            if step >= total or (stop_after and step >= stop_after) or (time_limit and time.time()
+                                                                        - t_call > time_limit):
                 if step % ckpt_every and not end_epoch and step != total: checkpoint(epoch)
                 stopped = True
                 break
@@ -248,7 +267,8 @@ def load_pretrained(model: str = "elm"):
     "(TreeTransformer, Tokenizer) of a shipped model by name, or of a checkpoint path with its tokenizer beside it."
     p = Path(model)
     if p.suffix == ".pt" or p.exists():
-        if p.is_dir(): raise TreebookError(f"the model {p} is a folder: give its checkpoint (.pt), e.g. {p / 'best.pt'}")
+        if p.is_dir():
+            raise TreebookError(f"the model {p} is a folder: give its checkpoint (.pt), e.g. {p / 'best.pt'}")
         if not p.is_file(): raise TreebookError(f"no such model file: {p}")
         pt = p
         tok_path = next((q for q in (p.with_suffix(".tok.json"), p.parent / "tokenizer.json") if q.is_file()), None)
@@ -256,39 +276,46 @@ def load_pretrained(model: str = "elm"):
         pt, tok_path = WEIGHTS / f"{model}.pt", WEIGHTS / f"{model}.tok.json"
         if not pt.is_file():
             names = sorted(q.stem for q in WEIGHTS.glob("*.pt") if (WEIGHTS / f"{q.stem}.tok.json").is_file())
-            raise TreebookError(f"no shipped model called {model!r}: choose one of {', '.join(names) or '(none shipped)'} or give a .pt path")
+            raise TreebookError(f"no shipped model called {model!r}: choose one of "
+                                f"{', '.join(names) or '(none shipped)'} or give a .pt path")
     if tok_path is None or not Path(tok_path).is_file():
-        raise TreebookError(f"no tokenizer beside {pt}: expected {Path(pt).with_suffix('.tok.json').name} or tokenizer.json")
+        raise TreebookError(f"no tokenizer beside {pt}: expected {Path(pt).with_suffix('.tok.json').name} or "
+                            f"tokenizer.json")
     return TreeTransformer.load(pt), Tokenizer.load(tok_path)
 
 def _batch_seed(seed: int, k: int) -> int:
     "The seed of batch `k` of a large sample (batch 0 keeps `seed`, so a sample that fits one batch is as before)."
     return seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
 
-def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None, top_k: int | None = None,
+def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None,
+                 top_k: int | None = None,
                  seed: int = 0, structure: bool = True, progress: bool = False, batch_size: int = 256) -> list:
     """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure` keeps
     every tree connected. They are drawn `batch_size` at a time, so memory stays bounded however large `n` is."""
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
-    if not (math.isfinite(temperature) and temperature >= 0): raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
+    if not (math.isfinite(temperature) and temperature >= 0):
+        raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
     net, tok = load_pretrained(model) if isinstance(model, (str, Path)) else model
     from treebook.sampling import sample
     threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # one token at a time is many tiny operations: one thread is faster, and much faster on a busy machine
+    # one token at a time is many tiny operations: one thread is faster, and much faster on a busy machine
+    torch.set_num_threads(1)
     trees, starts = [], range(0, n, batch_size)
     bar = tqdm(total=n, desc="trees", unit="tree", disable=not progress or len(starts) == 1)
     try:
         for k, i in enumerate(starts):
             seqs = sample(net, min(batch_size, n - i), tok=tok, temperature=temperature, top_k=top_k, top_p=top_p,
-                          structure=structure, min_len=24, seed=_batch_seed(seed, k), progress=progress and len(starts) == 1)
+                          structure=structure, min_len=24, seed=_batch_seed(seed, k), progress=progress
+                          and len(starts) == 1)
             trees += [tok.decode(s) for s in seqs]; bar.update(len(seqs))
     finally: torch.set_num_threads(threads); bar.close()
     return trees
 
 def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
-    "Sample `n` trees from the shipped elm model into `out_dir`: .npz and .obj each, and one PNG grid; returns the paths."
+    ("Sample `n` trees from the shipped elm model into `out_dir`: .npz and .obj each, and one PNG grid; returns the "
+     "paths.")
     from treebook.mesh import export_mesh
     from treebook.render import render, image_grid
     out_dir = Path(out_dir); out_dir.mkdir(parents=True, exist_ok=True)
@@ -303,24 +330,31 @@ def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
 # %% ../nbs/05_train.ipynb #633825fb
 def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
     "Parse `treebook train` arguments (with `parser_class`, so the CLI can make its errors one line) and run `train`."
-    p = parser_class(prog="treebook train", description="Train a TreeTransformer on a dataset folder (under torchrun: one process per rank).")
+    p = parser_class(prog="treebook train",
+                     description="Train a TreeTransformer on a dataset folder (under torchrun: one process per rank).")
     p.add_argument("--data", required=True); p.add_argument("--out", required=True)
     p.add_argument("--order", default="dfs", choices=ORDERS); p.add_argument("--arch", default="full", choices=ARCHS)
     whole, positive = lambda lo=1, hi=None: flag_number(int, lo, hi), flag_number(float, above=0)
     for name, typ, default in (("dim", whole(1, 4096), 128), ("depth", whole(1, 256), 8), ("heads", whole(1, 256), 4),
-                               ("batch-size", whole(), 8), ("epochs", whole(), 1), ("steps", whole(), None), ("lr", positive, 2e-3),
-                               ("warmup", whole(0), 100), ("grad-clip", flag_number(float, 0), 1.0), ("val-every", whole(), None),
+                               ("batch-size", whole(), 8), ("epochs", whole(), 1), ("steps", whole(), None),
+                               ("lr", positive, 2e-3),
+                               ("warmup", whole(0), 100), ("grad-clip", flag_number(float, 0), 1.0),
+                               ("val-every", whole(), None),
                                ("val-trees", whole(), 256), ("ckpt-every", whole(), 50), ("max-train", whole(), None),
-                               ("stop-after", whole(), None), ("time-limit", positive, None), ("threads", whole(1, 1024), None),
+                               ("stop-after", whole(), None), ("time-limit", positive, None),
+                               ("threads", whole(1, 1024), None),
                                ("seed", whole(0, 2 ** 32 - 1), 0)):
         p.add_argument(f"--{name}", type=typ, default=default)
     p.add_argument("--no-augment", action="store_true"); p.add_argument("--resume", action="store_true")
     p.add_argument("--quiet", action="store_true"); p.add_argument("--rank-weights", action="store_true")
     a = p.parse_args(argv)
-    r = train(a.data, a.out, order=a.order, arch=a.arch, dim=a.dim, depth=a.depth, heads=a.heads, batch_size=a.batch_size,
-              epochs=a.epochs, steps=a.steps, lr=a.lr, warmup=a.warmup, grad_clip=a.grad_clip, augment_data=not a.no_augment,
+    r = train(a.data, a.out, order=a.order, arch=a.arch, dim=a.dim, depth=a.depth, heads=a.heads,
+              batch_size=a.batch_size,
+              epochs=a.epochs, steps=a.steps, lr=a.lr, warmup=a.warmup, grad_clip=a.grad_clip,
+              augment_data=not a.no_augment,
               val_every=a.val_every, val_trees=a.val_trees, ckpt_every=a.ckpt_every, max_train=a.max_train,
-              stop_after=a.stop_after, time_limit=a.time_limit, threads=a.threads, resume=a.resume, seed=a.seed, progress=not a.quiet,
+              stop_after=a.stop_after, time_limit=a.time_limit, threads=a.threads, resume=a.resume, seed=a.seed,
+              progress=not a.quiet,
               rank_weights=a.rank_weights)
     r.pop("model")
     if int(os.environ.get("RANK", "0")) == 0: print(json.dumps(r))

@@ -36,9 +36,11 @@ def _points(a, name, dtype=np.float32) -> np.ndarray:
     "`a` as a float32 (n, 4) array (or `dtype`), or a `TreebookError` naming `name`."
     try:
         complex_ = np.asarray(a).dtype.kind == "c"
-        with np.errstate(over="ignore"): a = None if complex_ else np.array(a, dtype=dtype)   # too large for float32: infinity, refused below
+        # too large for float32: infinity, refused below
+        with np.errstate(over="ignore"): a = None if complex_ else np.array(a, dtype=dtype)
     except (TypeError, ValueError, OverflowError) as e:
-        raise TreebookError(f"`{name}` must be numbers, four a row (x, y, z, radius): {str(e).split(chr(10))[0][:80]}") from None
+        raise TreebookError(f"`{name}` must be numbers, four a row (x, y, z, radius): "
+                            f"{str(e).split(chr(10))[0][:80]}") from None
     if complex_: raise TreebookError(f"`{name}` holds complex numbers; positions and radii are real")
     if a.ndim != 2 or a.shape[1] != 4:
         raise TreebookError(f"`{name}` must have shape (n, 4) for x, y, z, radius; got shape {a.shape}")
@@ -56,7 +58,8 @@ def _parents(p, n) -> np.ndarray:
                "c": "complex numbers"}.get(p.dtype.kind, f"dtype {p.dtype}")
         raise TreebookError(f"`parent` must hold whole numbers (branch indices, -1 for a root), got {got}")
     if p.dtype.kind in "fu" and n and np.abs(p).max() >= 2 ** 63:
-        raise TreebookError(f"`parent` holds {np.abs(p).max():.4g}, out of range: a parent must be -1 (a root) or a branch index")
+        raise TreebookError(f"`parent` holds {np.abs(p).max():.4g}, out of range: a parent must be -1 (a root) or a "
+                            f"branch index")
     return p.astype(np.int64)
 
 def _cycle_from(parent, i):
@@ -71,11 +74,15 @@ def _check_topology(parent):
     n = len(parent)
     bad = np.flatnonzero((parent < -1) | (parent >= n))
     if len(bad):
-        i = bad[0]; raise TreebookError(f"branch {i} has parent {parent[i]}, out of range: a parent must be -1 (a root) or in 0..{n-1}")
+        i = bad[0]
+        raise TreebookError(f"branch {i} has parent {parent[i]}, out of range: a parent must be -1 (a root) or in "
+                            f"0..{n-1}")
     fwd = np.flatnonzero(parent >= np.arange(n))
     if len(fwd):
         i = int(fwd[0]); cyc = _cycle_from(parent, i)
-        if cyc: raise TreebookError(f"the parents of branches {' -> '.join(map(str, cyc + cyc[:1]))} form a cycle: a tree has none")
+        if cyc:
+            raise TreebookError(f"the parents of branches {' -> '.join(map(str, cyc + cyc[:1]))} form a cycle: a tree "
+                                f"has none")
         raise TreebookError(f"branch {i} has parent {parent[i]} which comes after it: store parents before children "
                             "(for example in DFS order) or build the tree with Tree.from_segments")
 def _origin(o) -> np.ndarray:
@@ -84,26 +91,34 @@ def _origin(o) -> np.ndarray:
     try: a = None if np.asarray(o).dtype.kind == "c" else np.array(o, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError): a = None
     if a is None or a.shape != (3,) or not np.isfinite(a).all():
-        raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got {str(o.tolist() if isinstance(o, np.ndarray) else o)[:60]}")
+        raise TreebookError(f"`origin` must be three finite numbers (x, y, z), got "
+                            f"{str(o.tolist() if isinstance(o, np.ndarray) else o)[:60]}")
     return a
 
 # %% ../nbs/00_tree.ipynb #b684dca1
 class Tree:
-    "A tree as `n` branch segments: `start`, `end` (n, 4: x, y, z, radius), `parent` (n,: -1 for a root), per-branch arrays."
-    def __init__(self, start, end, parent, *, check: bool = True, tol: float = 1e-4, allow_empty: bool = False, origin=None, **per_branch):
+    ("A tree as `n` branch segments: `start`, `end` (n, 4: x, y, z, radius), `parent` (n,: -1 for a root), per-branch "
+     "arrays.")
+    def __init__(self, start, end, parent, *, check: bool = True, tol: float = 1e-4, allow_empty: bool = False,
+                 origin=None, **per_branch):
         start, end = _points(start, "start"), _points(end, "end")
         origin = _origin(origin)
         n = len(start)
         if end.shape != start.shape:
             raise TreebookError(f"`start` and `end` must have the same shape; got {start.shape} and {end.shape}")
         if n == 0 and not allow_empty:
-            raise TreebookError("the tree is empty: it has no branches (an empty tree is only allowed with allow_empty=True)")
+            raise TreebookError("the tree is empty: it has no branches (an empty tree is only allowed with "
+                                "allow_empty=True)")
         parent = _parents(parent, n)
         for name, a in (("start", start), ("end", end)):
             bad = np.flatnonzero(~np.isfinite(a).all(1))
-            if len(bad): raise TreebookError(f"`{name}` of branch {bad[0]} is not a finite number (NaN or infinity): {a[bad[0]].tolist()}")
+            if len(bad):
+                raise TreebookError(f"`{name}` of branch {bad[0]} is not a finite number (NaN or infinity): "
+                                    f"{a[bad[0]].tolist()}")
             neg = np.flatnonzero(a[:, 3] < 0)
-            if len(neg): raise TreebookError(f"branch {neg[0]} has a negative radius at its {name} ({a[neg[0], 3]}); radii must be >= 0")
+            if len(neg):
+                raise TreebookError(f"branch {neg[0]} has a negative radius at its {name} ({a[neg[0], 3]}); radii must "
+                                    f"be >= 0")
         _check_topology(parent)
         extra = {}
         for k, v in per_branch.items():
@@ -204,18 +219,22 @@ Tree.children, Tree.depth = children, depth
 Tree.roots = property(lambda self: np.flatnonzero(self.parent < 0), doc="Indices of the root branches.")
 Tree.leaves = property(lambda self: np.flatnonzero(np.bincount(self.parent[self.parent >= 0], minlength=self.n) == 0),
                        doc="Indices of the branches with no children.")
-Tree.lengths = property(lambda self: np.linalg.norm(self.end[:, :3] - self.start[:, :3], axis=1), doc="Length of each branch.")
-Tree.height = property(lambda self: float(np.ptp(np.concatenate([self.start[:, 2], self.end[:, 2]]))) if self.n else 0.0,
+Tree.lengths = property(lambda self: np.linalg.norm(self.end[:, :3] - self.start[:, :3], axis=1),
+                        doc="Length of each branch.")
+Tree.height = property(lambda self: float(np.ptp(np.concatenate([self.start[:, 2], self.end[:, 2]]))) if self.n
+                       else 0.0,
                        doc="Extent of the tree along z, the up axis.")
 
 # %% ../nbs/00_tree.ipynb #d7a7c604
 def order(self: Tree, kind: str = "dfs", key=None) -> np.ndarray:
-    "Branch indices in depth-first ('dfs', pre-order) or breadth-first ('bfs') order; children sorted by `key`, then index."
+    ("Branch indices in depth-first ('dfs', pre-order) or breadth-first ('bfs') order; children sorted by `key`, then "
+     "index.")
     if kind not in ("dfs", "bfs"): raise TreebookError(f"unknown order {kind!r}: use 'dfs' or 'bfs'")
     if key is None: kids = self.children
     else:
         key = np.asarray(key)
-        if key.shape != (self.n,): raise TreebookError(f"`key` must have one value per branch ({self.n}); got shape {key.shape}")
+        if key.shape != (self.n,):
+            raise TreebookError(f"`key` must have one value per branch ({self.n}); got shape {key.shape}")
         kids = [c[np.lexsort((c, key[c]))] for c in self.children]
     out = []
     if kind == "dfs":
@@ -236,13 +255,15 @@ Tree.order = order
 def take(self: Tree, idx, tol: float = 1e-4) -> Tree:
     "The branches `idx`, in that order, with parents re-numbered; a branch whose parent is not taken becomes a root."
     idx = np.asarray(idx, dtype=np.int64).reshape(-1)
-    if len(idx) and (idx.min() < -self.n or idx.max() >= self.n): raise TreebookError(f"branch index out of range for a tree of {self.n} branches")
+    if len(idx) and (idx.min() < -self.n or idx.max() >= self.n):
+        raise TreebookError(f"branch index out of range for a tree of {self.n} branches")
     idx = idx % max(self.n, 1)
     if len(np.unique(idx)) != len(idx): raise TreebookError("`take` got the same branch twice")
     new = np.full(self.n, -1, dtype=np.int64); new[idx] = np.arange(len(idx))
     p = self.parent[idx]
     parent = np.where(p >= 0, new[np.maximum(p, 0)], -1)
-    return Tree(self.start[idx], self.end[idx], parent, tol=tol, allow_empty=True, origin=self.origin, **{k: v[idx] for k, v in self._attrs.items()})
+    return Tree(self.start[idx], self.end[idx], parent, tol=tol, allow_empty=True, origin=self.origin,
+                **{k: v[idx] for k, v in self._attrs.items()})
 
 def reorder(self: Tree, kind: str = "dfs", key=None) -> Tree:
     "The same tree with its branches stored in `kind` order ('dfs' or 'bfs')."
@@ -265,10 +286,12 @@ Tree.take, Tree.reorder, Tree.subtree, Tree.prefix = take, reorder, subtree, pre
 
 # %% ../nbs/00_tree.ipynb #7decb132
 def from_segments(cls, start, end, tol: float = 1e-4, **per_branch) -> Tree:
-    "A tree from segments in parents-first order, each parent inferred as the nearest earlier end within `tol` of the start."
+    ("A tree from segments in parents-first order, each parent inferred as the nearest earlier end within `tol` of the "
+     "start.")
     from scipy.spatial import cKDTree
     start, end = _points(start, "start"), _points(end, "end")
-    if start.shape != end.shape: raise TreebookError(f"`start` and `end` must have the same shape; got {start.shape} and {end.shape}")
+    if start.shape != end.shape:
+        raise TreebookError(f"`start` and `end` must have the same shape; got {start.shape} and {end.shape}")
     if not len(start): raise TreebookError("no segments given: the tree would be empty")
     for name, a in (("start", start), ("end", end)):
         if not np.isfinite(a).all(): raise TreebookError(f"`{name}` holds NaN or infinity")
@@ -302,7 +325,8 @@ def _map(self: Tree, f, rscale: float = 1.0) -> Tree:
     return Tree(*out, self.parent, check=False, allow_empty=True, origin=o, **self._attrs)
 
 def with_origin(self: Tree, origin=None) -> Tree:
-    "The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin into the positions)."
+    ("The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin "
+     "into the positions).")
     o = _origin(origin)
     if np.array_equal(o, self.origin): return self   # trees are immutable: nothing to re-express
     out = []
@@ -335,7 +359,8 @@ def mirror(self: Tree, axis: str = "x") -> Tree:
     return self._map(f)
 
 def too_far(magnitude: float, extent: float) -> bool:
-    "Whether float32 positions as large as `magnitude` cannot hold detail of 1e-5 x `extent` (map coordinates need an origin)."
+    ("Whether float32 positions as large as `magnitude` cannot hold detail of 1e-5 x `extent` (map coordinates need an "
+     "origin).")
     return bool(np.spacing(np.float32(magnitude)) > 1e-5 * max(float(extent), 1e-30))
 
 def origin_for(points):
@@ -359,9 +384,12 @@ class Frame:
     "The map into a canonical frame: p_canonical = (p - origin) * scale, radius * scale."
     origin: tuple
     scale: float
-    def apply(self, tree: Tree) -> Tree: "Take `tree` into the canonical frame."; return tree.translate(-np.asarray(self.origin)).scale(self.scale).with_origin()
+    def apply(self, tree: Tree) -> Tree:
+        "Take `tree` into the canonical frame."
+        return tree.translate(-np.asarray(self.origin)).scale(self.scale).with_origin()
     def restore(self, tree: Tree) -> Tree:
-        "Take a canonical `tree` back to the original units (about an origin when the frame's origin is too far for float32, see `origin_for`)."
+        ("Take a canonical `tree` back to the original units (about an origin when the frame's origin is too far for "
+         "float32, see `origin_for`).")
         t = tree.scale(1 / self.scale)
         o = np.asarray(self.origin, np.float64)
         if too_far(np.abs(o).max() + t.size, t.size): return _placed(t, t.origin + o)
@@ -455,7 +483,8 @@ def save(self: Tree, path) -> Path:
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        arrays = dict(start=self.start, end=self.end, parent=self.parent, format_version=np.int64(FORMAT_VERSION), **self._attrs)
+        arrays = dict(start=self.start, end=self.end, parent=self.parent, format_version=np.int64(FORMAT_VERSION),
+                      **self._attrs)
         if self.origin.any(): arrays["origin"] = self.origin
         return _atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
     if suffix == ".json":
@@ -468,38 +497,48 @@ def save(self: Tree, path) -> Path:
 
 def _check_version(v, path, what="tree", newest=FORMAT_VERSION):
     if isinstance(v, np.ndarray) and v.ndim == 0: v = v.item()  # a scalar stored in an .npz
-    if not isinstance(v, (int, np.integer)) or isinstance(v, bool): raise TreebookError(f"{path} has no valid {what} format version ({str(v)[:40]})")
+    if not isinstance(v, (int, np.integer)) or isinstance(v, bool):
+        raise TreebookError(f"{path} has no valid {what} format version ({str(v)[:40]})")
     if int(v) > newest:
-        raise TreebookError(f"{path} was written by a newer treebook ({what} format {int(v)}; this one reads up to {newest}): upgrade treebook")
+        raise TreebookError(f"{path} was written by a newer treebook ({what} format {int(v)}; this one reads up to "
+                            f"{newest}): upgrade treebook")
 
 def _not_json(c):
     raise TreebookError(f"holds {c}, which is not a number in JSON")
 
 def read_json(path, fmt: str, newest: int, what: str, version_key: str = "format_version", hint: str = "") -> dict:
-    "The JSON object in `path`, checked to be a treebook `fmt` file of a version this treebook reads (at most `newest`)."
+    ("The JSON object in `path`, checked to be a treebook `fmt` file of a version this treebook reads (at most "
+     "`newest`).")
     path = Path(path)
-    if not path.is_file(): raise TreebookError(f"no such file: {path}" if not path.is_dir() else f"{path} is a folder, not a {what} file")
+    if not path.is_file():
+        raise TreebookError(f"no such file: {path}" if not path.is_dir() else f"{path} is a folder, not a {what} file")
     try: d = json.loads(path.read_text(), parse_constant=_not_json)
     except TreebookError as e: raise TreebookError(f"{path} {e} (NaN and infinity are not allowed)") from None
-    except UnicodeDecodeError: raise TreebookError(f"{path} is not a treebook {what} file (it is not JSON text){hint}") from None
+    except UnicodeDecodeError:
+        raise TreebookError(f"{path} is not a treebook {what} file (it is not JSON text){hint}") from None
     except (ValueError, RecursionError) as e:
         raise TreebookError(f"cannot read {path} as JSON: {str(e).splitlines()[0][:100]}") from None
     except OSError as e: raise TreebookError(f"cannot read {path}: {(e.strerror or str(e)).lower()}") from None
-    if not isinstance(d, dict) or d.get("format") != fmt: raise TreebookError(f"{path} is not a treebook {what} file{hint}")
+    if not isinstance(d, dict) or d.get("format") != fmt:
+        raise TreebookError(f"{path} is not a treebook {what} file{hint}")
     _check_version(d.get(version_key, 1), path, what, newest)
     return d
 
 def _read_npz(path: Path) -> dict:
     "The arrays of an .npz file, or a `TreebookError` saying in a line why not."
     with open(path, "rb") as f: head = f.read(4)
-    if head not in (b"PK\x03\x04", b"PK\x05\x06"): raise TreebookError(f"{path} is not a .npz file (it is not a zip archive of arrays)")
+    if head not in (b"PK\x03\x04", b"PK\x05\x06"):
+        raise TreebookError(f"{path} is not a .npz file (it is not a zip archive of arrays)")
     try:
         with np.load(path, allow_pickle=False) as z: return {k: z[k] for k in z.files}
     except ValueError as e:
-        if "pickle" in str(e): raise TreebookError(f"{path} holds Python objects, not plain arrays: treebook does not load them") from None
-        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the file complete?") from None
+        if "pickle" in str(e):
+            raise TreebookError(f"{path} holds Python objects, not plain arrays: treebook does not load them") from None
+        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the "
+                            f"file complete?") from None
     except Exception as e:
-        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the file complete?") from None
+        raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the "
+                            f"file complete?") from None
 
 def _attrs_of_json(a) -> dict:
     "The per-branch arrays of a JSON tree: {name: {'dtype': numpy dtype, 'data': list}}."
@@ -509,9 +548,11 @@ def _attrs_of_json(a) -> dict:
         if not isinstance(v, dict) or "data" not in v or not isinstance(v.get("dtype"), str):
             raise TreebookError(f"per-branch array {k!r} must be {{\"dtype\": ..., \"data\": [...]}}")
         try: dt = np.dtype(v["dtype"])
-        except TypeError: raise TreebookError(f"per-branch array {k!r} has the unknown dtype {v['dtype'][:20]!r}") from None
+        except TypeError:
+            raise TreebookError(f"per-branch array {k!r} has the unknown dtype {v['dtype'][:20]!r}") from None
         try: out[k] = np.array(v["data"], dtype=dt)
-        except (TypeError, ValueError, OverflowError): raise TreebookError(f"per-branch array {k!r} does not hold {dt} values") from None
+        except (TypeError, ValueError, OverflowError):
+            raise TreebookError(f"per-branch array {k!r} does not hold {dt} values") from None
     return out
 
 def _checked_arrays(start, end, parent, origin, attrs) -> dict:
@@ -524,7 +565,8 @@ def _checked_arrays(start, end, parent, origin, attrs) -> dict:
             start[:, :3] -= o; end[:, :3] -= o; origin = origin + o
     for k, v in attrs.items():
         if k in ("check", "tol", "allow_empty"): raise TreebookError(f"per-branch array name {k!r} is reserved")
-        if v.dtype.kind not in "biufU": raise TreebookError(f"per-branch array {k!r} must hold numbers or text, got dtype {v.dtype}")
+        if v.dtype.kind not in "biufU":
+            raise TreebookError(f"per-branch array {k!r} must hold numbers or text, got dtype {v.dtype}")
     return dict(start=start, end=end, parent=parent, origin=origin, **attrs)
 
 def load(cls, path, check: bool = True) -> Tree:
@@ -533,12 +575,15 @@ def load(cls, path, check: bool = True) -> Tree:
     if not path.exists(): raise TreebookError(f"no such file: {path}")
     if path.is_dir(): raise TreebookError(f"{path} is a folder, not a tree file")
     suffix = path.suffix.lower()
-    if suffix not in (".npz", ".json"): raise TreebookError(f"cannot read {path.name!r} as a tree: expected a .npz or .json file")
+    if suffix not in (".npz", ".json"):
+        raise TreebookError(f"cannot read {path.name!r} as a tree: expected a .npz or .json file")
     if suffix == ".npz":
         arrays = _read_npz(path)
         _check_version(arrays.pop("format_version", 1), path)
         missing = [k for k in _CORE if k not in arrays]
-        if missing: raise TreebookError(f"{path} is missing the array(s) {', '.join(missing)}: a tree .npz needs start, end and parent")
+        if missing:
+            raise TreebookError(f"{path} is missing the array(s) {', '.join(missing)}: a tree .npz needs start, end "
+                                f"and parent")
         parts = [arrays.pop(k) for k in _CORE] + [arrays.pop("origin", None), arrays]
     else:
         d = read_json(path, "treebook.tree", FORMAT_VERSION, "tree")
@@ -547,7 +592,8 @@ def load(cls, path, check: bool = True) -> Tree:
         empty = lambda v: np.zeros((0, 4)) if isinstance(v, list) and not v else v
         try: parent = np.array(d["parent"])
         except (ValueError, OverflowError): parent = np.array([], dtype=object)
-        if parent.dtype.kind == "O": raise TreebookError(f"{path}: `parent` must be a list of whole numbers (branch indices, -1 for a root)")
+        if parent.dtype.kind == "O":
+            raise TreebookError(f"{path}: `parent` must be a list of whole numbers (branch indices, -1 for a root)")
         try: attrs = _attrs_of_json(d.get("attrs", {}))
         except TreebookError as e: raise TreebookError(f"{path}: {e}") from None
         parts = [empty(d["start"]), empty(d["end"]), parent, d.get("origin"), attrs]
@@ -558,14 +604,17 @@ Tree.save, Tree.load = save, classmethod(load)
 
 # %% ../nbs/00_tree.ipynb #aad2ea02
 def flag_number(kind=float, lo=None, hi=None, above=None):
-    "An argparse `type=` for a numeric flag: `kind` (int or float), finite, at least `lo` (or more than `above`), at most `hi`."
+    ("An argparse `type=` for a numeric flag: `kind` (int or float), finite, at least `lo` (or more than `above`), at "
+     "most `hi`.")
     what = "a whole number" if kind is int else "a finite number"
     low = f">= {lo:g}" if lo is not None else f"> {above:g}" if above is not None else ""
-    rng = f" in {lo:g}..{hi:g}" if lo is not None and hi is not None else (f" {low}" if low else "") + (f" <= {hi:g}" if hi is not None and not low else f" and <= {hi:g}" if hi is not None else "")
+    rng = f" in {lo:g}..{hi:g}" if lo is not None and hi is not None else (f" {low}" if low
+                                                                           else "") + (f" <= {hi:g}" if hi is not None and not low else f" and <= {hi:g}" if hi is not None else "")
     def parse(s):
         try: v = int(s) if kind is int else float(s)
         except (TypeError, ValueError): raise argparse.ArgumentTypeError(f"expected {what}{rng}, got {s!r}") from None
-        if not math.isfinite(v) or (lo is not None and v < lo) or (above is not None and v <= above) or (hi is not None and v > hi):
+        if not math.isfinite(v) or (lo is not None and v < lo) or (above is not None
+                                                                   and v <= above) or (hi is not None and v > hi):
             raise argparse.ArgumentTypeError(f"must be {what}{rng}, got {s!r}")
         return v
     parse.__name__ = "whole number" if kind is int else "number"
@@ -577,7 +626,8 @@ def info(self: Tree) -> dict:
     lo, hi = self.bounds() + self.origin   # in the world: positions plus the origin
     return {"branches": self.n, "roots": len(self.roots), "leaves": len(self.leaves), "height": self.height,
             "depth": int(self.depth.max()) + 1, "bbox_min": lo.tolist(), "bbox_max": hi.tolist(),
-            "total_length": float(self.lengths.sum()), "max_radius": float(max(self.start[:, 3].max(), self.end[:, 3].max())),
+            "total_length": float(self.lengths.sum()),
+            "max_radius": float(max(self.start[:, 3].max(), self.end[:, 3].max())),
             "attrs": sorted(self._attrs), **({"origin": self.origin.tolist()} if self.origin.any() else {})}
 
 def with_pipe_radii(self: Tree, tip: float = 0.01, exponent: float = 2.5) -> Tree:
@@ -596,7 +646,8 @@ def with_pipe_radii(self: Tree, tip: float = 0.01, exponent: float = 2.5) -> Tre
 Tree.info, Tree.with_pipe_radii = info, with_pipe_radii
 
 # %% ../nbs/00_tree.ipynb #302bf1b8
-def example_tree(levels: int = 4, seed: int = 0, internodes: int = 2, spread: float = 38.0, shrink: float = 0.72) -> Tree:
+def example_tree(levels: int = 4, seed: int = 0, internodes: int = 2, spread: float = 38.0,
+                 shrink: float = 0.72) -> Tree:
     "A small deterministic tree: `levels` of forking axes of `internodes` segments each, radii by the pipe model."
     if levels < 1 or internodes < 1: raise TreebookError("example_tree needs levels >= 1 and internodes >= 1")
     rng = np.random.default_rng(seed)

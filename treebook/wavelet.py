@@ -27,7 +27,8 @@ DATA = Path(str(importlib.resources.files("treebook"))) / "data" / "scans"
 def shipped_scan(name: str = "tree13.xyz") -> Path:
     "Path of a scan shipped inside the package (see `treebook/data/scans/README.md` for source and license)."
     p = DATA / name
-    if not p.exists(): raise TreebookError(f"no shipped scan {name!r}; shipped: {sorted(f.name for f in DATA.glob('*.xyz'))}")
+    if not p.exists():
+        raise TreebookError(f"no shipped scan {name!r}; shipped: {sorted(f.name for f in DATA.glob('*.xyz'))}")
     return p
 
 # %% auto #0
@@ -53,7 +54,8 @@ class Alignment:
         return np.column_stack([c * q[:, 0] - s * q[:, 1], s * q[:, 0] + c * q[:, 1], q[:, 2]])
     def to_dict(self) -> dict:
         return {"root": [float(v) for v in self.root], "angle": float(self.angle), "up": self.up,
-                "scanner_source": self.scanner_source, "trunk_radius": float(self.trunk_radius), "symmetrized": self.symmetrized}
+                "scanner_source": self.scanner_source, "trunk_radius": float(self.trunk_radius),
+                "symmetrized": self.symmetrized}
 
 def _fit_circle(xy):
     "Least-squares circle (Kasa): centre (2,), radius."
@@ -84,7 +86,8 @@ def align(points, up: str = "z", scanner=None, symmetrize: bool = False):
         try: sc = np.asarray(scanner, np.float64).reshape(-1)
         except (TypeError, ValueError): sc = np.array([np.nan])
         if sc.shape not in ((2,), (3,)) or not np.isfinite(sc).all():
-            raise TreebookError(f"the scanner position must be 2 or 3 finite numbers (x, y[, z]) in the scan's frame, got {scanner!r}")
+            raise TreebookError(f"the scanner position must be 2 or 3 finite numbers (x, y[, z]) in the scan's frame, "
+                                f"got {scanner!r}")
         scanner = up_to_z(np.append(sc, 0.0)[None, :3] if len(sc) == 2 else sc[None], up)[0]
     z0 = float(np.quantile(p[:, 2], 0.001))
     H = float(np.quantile(p[:, 2], 0.999) - z0)
@@ -93,7 +96,9 @@ def align(points, up: str = "z", scanner=None, symmetrize: bool = False):
     root = np.array([xy[0], xy[1], z0])
     if scanner is not None:
         d, source = root[:2] - scanner[:2], "given"
-        if np.linalg.norm(d) == 0: raise TreebookError("the scanner position is straight above or below the root; give its horizontal position")
+        if np.linalg.norm(d) == 0:
+            raise TreebookError("the scanner position is straight above or below the root; give its horizontal "
+                                "position")
     elif arc is not None: d, source = -arc, "estimated"   # the visible arc faces the scanner
     else: d, source = np.array([0.0, 1.0]), "unknown"
     al = Alignment(tuple(root.tolist()), float(np.pi / 2 - np.arctan2(d[1], d[0])), up, source, r, bool(symmetrize))
@@ -107,7 +112,8 @@ class CoarseGridWarning(UserWarning):
 
 @dataclass
 class Voxels:
-    "An occupancy grid: `occ` (N, N, N) bool, `origin` (3,) of the grid's corner, `h` the voxel edge, in scan units; optionally the points and their voxels."
+    ("An occupancy grid: `occ` (N, N, N) bool, `origin` (3,) of the grid's corner, `h` the voxel edge, in scan units; "
+     "optionally the points and their voxels.")
     occ: np.ndarray
     origin: np.ndarray
     h: float
@@ -123,7 +129,8 @@ class Voxels:
         hl = self.h * 2.0 ** (self.levels - level)
         return self.origin + (np.asarray(idx, np.float64) + 0.5) * hl
     def centroids(self, idx, level=None) -> np.ndarray:
-        "Mean position of the scan points inside voxels `idx` of the grid at `level` (the voxel centre where a voxel holds no point or no points are kept)."
+        ("Mean position of the scan points inside voxels `idx` of the grid at `level` (the voxel centre where a voxel "
+         "holds no point or no points are kept).")
         level = self.levels if level is None else level
         idx = np.asarray(idx, np.int64).reshape(-1, 3)
         out = self.centres(idx, level)
@@ -142,13 +149,16 @@ class Voxels:
 def check_grid(grid) -> int:
     "`grid` as an int power of two >= 8, or a `TreebookError`."
     try: g = int(grid)
-    except (TypeError, ValueError): raise TreebookError(f"grid must be a whole number (a power of two such as 64, 128, 256), got {grid!r}") from None
-    if g != grid or g < 8 or g & (g - 1): raise TreebookError(f"grid must be a power of two >= 8 (64, 128, 256...), got {grid!r}")
+    except (TypeError, ValueError):
+        raise TreebookError(f"grid must be a whole number (a power of two such as 64, 128, 256), got {grid!r}") from None
+    if g != grid or g < 8 or g & (g - 1):
+        raise TreebookError(f"grid must be a power of two >= 8 (64, 128, 256...), got {grid!r}")
     if g > 1024: raise TreebookError(f"grid {g} is too large (at most 1024: {g}^3 voxels would not fit in memory)")
     return g
 
 def voxelize(points, grid: int = 128) -> Voxels:
-    "Occupancy of aligned `points` in a `grid`^3 grid: voxel edge = largest extent / grid, floor at the lowest point, centred in x and y."
+    ("Occupancy of aligned `points` in a `grid`^3 grid: voxel edge = largest extent / grid, floor at the lowest point, "
+     "centred in x and y.")
     N = check_grid(grid)
     p = check_points(points)
     lo, hi = p.min(0), p.max(0)
@@ -159,14 +169,16 @@ def voxelize(points, grid: int = 128) -> Voxels:
     occ = np.zeros((N, N, N), bool)
     occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
     if N < 64:
-        warnings.warn(f"grid {N}^3 is coarse: one voxel is {h:.3g} units; branches will merge and bend at right angles (use 64 or more)", CoarseGridWarning, stacklevel=2)
+        warnings.warn(f"grid {N}^3 is coarse: one voxel is {h:.3g} units; branches will merge and bend at right angles "
+                      f"(use 64 or more)", CoarseGridWarning, stacklevel=2)
     return Voxels(occ, origin, h, p, idx)
 
 # %% ../nbs/08_wavelet_grammar.ipynb #e25bff95
 def transform(occ) -> pywt.FswavedecnResult:
     "The 3D Haar standard (fully separable) decomposition of a grid."
     a = np.asarray(occ, np.float32)
-    if a.ndim != 3 or len(set(a.shape)) != 1: raise TreebookError(f"the grid must be a cube (N, N, N); got shape {a.shape}")
+    if a.ndim != 3 or len(set(a.shape)) != 1:
+        raise TreebookError(f"the grid must be a cube (N, N, N); got shape {a.shape}")
     check_grid(a.shape[0])
     return pywt.fswavedecn(a, "haar")
 
@@ -181,14 +193,17 @@ def dyad(coeffs: pywt.FswavedecnResult, j: int) -> np.ndarray:
     return coeffs[(j + 1,) * 3]
 
 def compression(occ, coeffs=None, v: float = 0.2) -> dict:
-    "Paper Table 1: share of zero coefficients (lossless), share below `v` (lossy; pywt's orthonormal Haar) and the lossy IoU."
-    if not (np.isfinite(v) and v >= 0): raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
+    ("Paper Table 1: share of zero coefficients (lossless), share below `v` (lossy; pywt's orthonormal Haar) and the "
+     "lossy IoU.")
+    if not (np.isfinite(v) and v >= 0):
+        raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
     occ = np.asarray(occ, bool)
     coeffs = transform(occ) if coeffs is None else coeffs
     c = coeffs.coeffs
     zero = np.abs(c) <= 1e-6
     keep = np.abs(c) >= v
-    kept = copy.copy(coeffs); kept.coeffs = np.where(keep, c, 0).astype(c.dtype)   # a shallow copy: the input stays as it was
+    # a shallow copy: the input stays as it was
+    kept = copy.copy(coeffs); kept.coeffs = np.where(keep, c, 0).astype(c.dtype)
     rec = pywt.fswaverecn(kept) > 0.5
     inter, union = np.logical_and(rec, occ).sum(), np.logical_or(rec, occ).sum()
     return {"grid": int(c.shape[0]), "occupied": int(occ.sum()), "coefficients": int(c.size),
@@ -213,7 +228,8 @@ def plot_dyads(coeffs, levels=None, axis: int = 1, axes=None, cmap: str = "magma
 _OFFS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])   # child c = 4i + 2j + k
 
 def pyramid(occ) -> list:
-    "Occupancy at every level: [2^0 grid, 2^1 grid, ..., the N grid]; a voxel is occupied when its block's mean is non-zero."
+    ("Occupancy at every level: [2^0 grid, 2^1 grid, ..., the N grid]; a voxel is occupied when its block's mean is "
+     "non-zero.")
     out = [np.asarray(occ, bool)]
     while out[-1].shape[0] > 1:
         a = out[-1]; n = a.shape[0] // 2
@@ -240,7 +256,8 @@ def _child_pattern(fine, idx):
     return pat
 
 def voxel_rules(occ, transitions: int = 2) -> np.ndarray:
-    "Counts (64, 256): how often a voxel with 6-neighbour key k has child pattern p, over the finest `transitions` level pairs."
+    ("Counts (64, 256): how often a voxel with 6-neighbour key k has child pattern p, over the finest `transitions` "
+     "level pairs.")
     pyr = pyramid(occ)
     counts = np.zeros((64, 256), np.int64)
     for j in range(max(len(pyr) - 1 - transitions, 0), len(pyr) - 1):
@@ -272,7 +289,8 @@ def super_resolve(occ, counts=None, seed: int = 0) -> np.ndarray:
     return out
 
 def upsample(occ) -> np.ndarray:
-    "Plain upsampling: invert one more Haar level whose detail coefficients are all zero (each voxel -> a full 2x2x2 block)."
+    ("Plain upsampling: invert one more Haar level whose detail coefficients are all zero (each voxel -> a full 2x2x2 "
+     "block).")
     a = np.asarray(occ, np.float32)
     z = np.zeros_like(a)
     d = {k: z for k in ("aad", "ada", "add", "daa", "dad", "dda", "ddd")}
@@ -285,7 +303,8 @@ def iou(a, b) -> float:
 
 # %% ../nbs/08_wavelet_grammar.ipynb #32769f8d
 def dyad_nodes(coeffs, j: int, means=None, threshold: float = 0.3) -> np.ndarray:
-    "Indices (m, 3) of the voxels of dyad `j` whose |coefficient| exceeds `threshold` of the most a coefficient can be for its block's occupancy."
+    ("Indices (m, 3) of the voxels of dyad `j` whose |coefficient| exceeds `threshold` of the most a coefficient can "
+     "be for its block's occupancy.")
     d = np.abs(dyad(coeffs, j))
     L = coeffs.levels[0]
     if means is None:
@@ -302,17 +321,21 @@ def block_means(occ) -> list:
         out.append(a.reshape(n, 2, n, 2, n, 2).mean((1, 3, 5)))
     return out[::-1]
 
-def dyad_tree(vox: Voxels, idx, j: int, trunk_radius=None, k: int = 8, clean: bool = True, root=(0.0, 0.0, 0.0)) -> Tree:
-    "The tree of nodes `idx` of dyad `j` and the scan's `root`: MST through the nodes' point centroids, then `simplify` at the dyad's voxel size (`clean`)."
+def dyad_tree(vox: Voxels, idx, j: int, trunk_radius=None, k: int = 8, clean: bool = True,
+              root=(0.0, 0.0, 0.0)) -> Tree:
+    ("The tree of nodes `idx` of dyad `j` and the scan's `root`: MST through the nodes' point centroids, then "
+     "`simplify` at the dyad's voxel size (`clean`).")
     p = np.unique(vox.centroids(idx, j), axis=0)
     if len(p) < 2: raise TreebookError(f"dyad {j} has fewer than 2 nodes; lower the threshold or use a finer grid")
     if root is not None:
-        p = np.concatenate([np.asarray(root, np.float64).reshape(1, 3), p[np.linalg.norm(p - np.asarray(root), axis=1) > 1e-9]])
+        p = np.concatenate([np.asarray(root, np.float64).reshape(1, 3),
+                            p[np.linalg.norm(p - np.asarray(root), axis=1) > 1e-9]])
     p, par = _mst_nodes(p, k, None if root is None else 0)
     if clean: p, par = simplify(p, par, vox.h * 2.0 ** (vox.levels - j))
     return nodes_tree(p, par, trunk_radius=trunk_radius)
 
-def dyad_trees(vox: Voxels, coeffs=None, threshold: float = 0.3, min_nodes: int = 4, trunk_radius=None, k: int = 8, clean: bool = True) -> dict:
+def dyad_trees(vox: Voxels, coeffs=None, threshold: float = 0.3, min_nodes: int = 4, trunk_radius=None, k: int = 8,
+               clean: bool = True) -> dict:
     "{level j: Tree} for every dyad with at least `min_nodes` nodes, in the aligned frame and the scan's units."
     coeffs = transform(vox.occ) if coeffs is None else coeffs
     means = block_means(vox.occ)
@@ -341,7 +364,8 @@ def plot_tree(tree: Tree, ax=None, view: str = "front", color="saddlebrown", wid
     return ax
 
 # %% ../nbs/08_wavelet_grammar.ipynb #325a28ce
-def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, threshold=0.3, axiom_level=None, compress=True):
+def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, threshold=0.3, axiom_level=None,
+           compress=True):
     t = {}; t0 = time.perf_counter()
     pts = read_points(scan, up="z") if isinstance(scan, (str, Path)) else check_points(scan)
     t["read"] = time.perf_counter() - t0; t1 = time.perf_counter()
@@ -362,7 +386,8 @@ def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, thresh
     else: row = {}
     t["total"] = time.perf_counter() - t0
     row.update({"scan": Path(scan).name if isinstance(scan, (str, Path)) else "array", "points": int(len(pts)),
-                "productions": g.n_rules, "axiom_vectors": len(g.axiom_start), "dyads": {int(j): tr.n for j, tr in trees.items()}})
+                "productions": g.n_rules, "axiom_vectors": len(g.axiom_start),
+                "dyads": {int(j): tr.n for j, tr in trees.items()}})
     g.meta = {"source": row["scan"], "grid": int(grid), "threshold": threshold, "alignment": al.to_dict(),
               "compression": row, "timings": {k: round(v_, 4) for k, v_ in t.items()}}
     return g, trees, vox, co
@@ -370,7 +395,8 @@ def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, thresh
 def infer_grammar(scan, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False, v: float = 0.2,
                   threshold: float = 0.3, axiom_level=None, compress: bool = True) -> Grammar:
     "Grammar of a scan (path or (n, 3) points); `grammar.meta` holds the compression row and the timings of each stage."
-    if not (np.isfinite(v) and v >= 0): raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
+    if not (np.isfinite(v) and v >= 0):
+        raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
     return _infer(scan, grid, up, scanner, symmetrize, v, threshold, axiom_level, compress)[0]
 
 def compression_header() -> str:
@@ -384,9 +410,11 @@ def compression_line(g: Grammar) -> str:
     return (f"{r['scan']:<22}{r['grid']:>6}{r['points']:>9}{r['occupied']:>10}{100 * r['lossless']:>9.2f}%"
             f"{100 * r['lossy']:>9.2f}%{r['lossy_iou']:>7.3f}{r['productions']:>8}{t.get('total', float('nan')):>9.3f}")
 
-def enhance(scan, levels: int = 1, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False, seed: int = 0) -> Tree:
+def enhance(scan, levels: int = 1, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False,
+            seed: int = 0) -> Tree:
     "The scan's finest dyad tree refined `levels` more times by its own productions (more detail than was scanned)."
-    if not isinstance(levels, (int, np.integer)) or levels < 0: raise TreebookError(f"levels must be a whole number >= 0, got {levels!r}")
+    if not isinstance(levels, (int, np.integer)) or levels < 0:
+        raise TreebookError(f"levels must be a whole number >= 0, got {levels!r}")
     g, trees, _, _ = _infer(scan, grid, up, scanner, symmetrize, compress=False)
     rng = np.random.default_rng(seed)
     t = trees[g.finest]
@@ -394,7 +422,8 @@ def enhance(scan, levels: int = 1, grid: int = 128, up: str = "z", scanner=None,
     return t
 
 def demo_grammar(out_dir, seed: int = 0, grid: int = 128, n: int = 3) -> list:
-    "Infer a grammar from the shipped scan, write grammar.json, `n` propagated trees (.npz) and a picture; return the paths."
+    ("Infer a grammar from the shipped scan, write grammar.json, `n` propagated trees (.npz) and a picture; return the "
+     "paths.")
     import matplotlib; import matplotlib.pyplot as plt
     out = Path(out_dir)
     if out.exists() and not out.is_dir(): raise TreebookError(f"{out} is a file; give a folder")
@@ -410,7 +439,8 @@ def demo_grammar(out_dir, seed: int = 0, grid: int = 128, n: int = 3) -> list:
     fig, axs = plt.subplots(1, n + 2, figsize=(2.6 * (n + 2), 3.4))
     plot_tree(scan_t, axs[0], title="scan (finest dyad)")
     plot_tree(enh, axs[1], color="darkgreen", title=f"enhanced (C {chamfer(scan_t, enh):.3f})")
-    for i, t in enumerate(forest): plot_tree(t, axs[i + 2], color="forestgreen", title=f"propagated {i} (C {chamfer(scan_t, t):.3f})")
+    for i, t in enumerate(forest):
+        plot_tree(t, axs[i + 2], color="forestgreen", title=f"propagated {i} (C {chamfer(scan_t, t):.3f})")
     fig.tight_layout()
     png = out / "grammar_demo.png"
     _atomic_write(png, lambda f: fig.savefig(f, format="png", dpi=90)); plt.close(fig)

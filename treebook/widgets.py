@@ -76,7 +76,8 @@ class SampleExplorer:
         )[0]
         self.tree = tok.decode(seq)
         self.image.value = tree_png(self.tree, size=self.size)
-        self.label.value = f"{self.model.value}: {self.tree.n} branches (seed {self.seed.value}, T={self.temperature.value:.2f}, top-p={self.top_p.value:.2f})"
+        self.label.value = (f"{self.model.value}: {self.tree.n} branches (seed {self.seed.value}, "
+                            f"T={self.temperature.value:.2f}, top-p={self.top_p.value:.2f})")
 
     def _repr_mimebundle_(self, **kw): return self.widget._repr_mimebundle_(**kw)
 
