@@ -116,36 +116,45 @@ def token_connectivity(seq, tok) -> float:
 @torch.no_grad()
 def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len: int | None = None,
            min_len: int = 0, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
-           structure: bool = True, fair_stops: bool = True, cache: bool = True, seed: int = 0, progress: bool = False, return_logits: bool = False):
+           structure: bool = True, fair_stops: bool | str = True, cache: bool = True, seed: int = 0,
+           progress: bool = False, return_logits: bool = False, grammar=TreeGrammar, offset: int = 0):
     "Sample `n` token sequences from `model`; returns a list of int64 arrays (and the logits (n, steps, V) if asked)."
     c, tk = model.config, tok if tok is not None else CONTRACT
     if structure and not hasattr(tk, "root_tokens"):
-        raise TreebookError("structure-aware decoding needs the fitted tokenizer for the root cell and the smallest radius: "
-                            "pass tok=..., or structure=False")
+        raise TreebookError("structure-aware decoding needs the fitted tokenizer for the root cell and the smallest "
+                            "radius: pass tok=..., or structure=False")
     if n < 1: raise TreebookError(f"n must be at least 1, got {n}")
-    if not temperature >= 0 or temperature == float("inf"): raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
+    if not temperature >= 0 or temperature == float("inf"):
+        raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_k is not None and top_k < 1: raise TreebookError(f"top_k must be at least 1, got {top_k}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
+    if fair_stops not in (True, False, "always"):
+        raise TreebookError(f"fair_stops must be True, False or 'always', got {fair_stops!r}")
     max_len = c.max_len if max_len is None else max_len
     if max_len > c.max_len: raise TreebookError(f"max_len {max_len} is longer than the model's max_len {c.max_len}")
     prompt = np.atleast_2d(np.asarray([tk.sos] * 8 if prompt is None else prompt, dtype=np.int64))
     if prompt.shape[0] == 1: prompt = np.repeat(prompt, n, 0)
-    if prompt.shape[0] != n: raise TreebookError(f"prompt has {prompt.shape[0]} rows for n={n} samples: give one row or n")
+    if prompt.shape[0] != n:
+        raise TreebookError(f"prompt has {prompt.shape[0]} rows for n={n} samples: give one row or n")
     P = prompt.shape[1]
     if P < 1: raise TreebookError("the prompt is empty: it must hold at least the first token ([SOS])")
     if P >= max_len: raise TreebookError(f"the prompt ({P} tokens) leaves no room below max_len {max_len}")
     if prompt.min() < 0 or prompt.max() >= c.vocab_size:
         raise TreebookError(f"prompt tokens must lie in 0..{c.vocab_size - 1}")
     if structure and max_len < 24: raise TreebookError(f"max_len {max_len} is too short for one branch (24 tokens)")
+    if not 0 <= offset < P: raise TreebookError(f"offset {offset} must count condition positions of the prompt ({P})")
+    if structure and offset and grammar is TreeGrammar:
+        raise TreebookError("TreeGrammar reads no condition positions: with offset > 0 pass a grammar that skips them")
     model.eval()
     gen = torch.Generator().manual_seed(seed)
     seqs = torch.full((n, max_len), tk.pad, dtype=torch.long)
     seqs[:, :P] = torch.from_numpy(prompt)
-    grammar = TreeGrammar(tk, n, max_len) if structure else None
+    grammar = grammar(tk, n, max_len) if structure else None
     if grammar:
         for t in range(P): grammar.observe(prompt[:, t], t)
     ending, done = np.zeros(n, bool), np.zeros(n, bool)
     length, all_logits = np.full(n, max_len), []
+    sharp = temperature != 1 or top_k or (top_p or 1) < 1           # at plain temperature both draws have the same odds
     if cache:
         state = DecodeState(model, n, max_len)
         logits = model.extend(seqs[:, :P], state)[:, -1]
@@ -156,7 +165,8 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
         if t < min_len: ok[ok.sum(1) > 1, tk.eos] = False     # no [EOS] yet, unless it is the only choice
         ok[ending] = False; ok[ending, tk.eos] = True
         ok[done] = False; ok[done, tk.pad] = True
-        if fair_stops and temperature > 0 and t % 8 == 0 and t >= 16 and (temperature != 1 or top_k or (top_p or 1) < 1):
+        u = t - offset                                          # position after the condition tokens
+        if fair_stops and temperature > 0 and u % 8 == 0 and u >= 16 and (sharp or fair_stops == "always"):
             nxt = pick_block(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen, tk.n_values)
         else: nxt = pick(logits, torch.from_numpy(ok), temperature, top_k, top_p, gen)
         seqs[:, t] = nxt
@@ -164,11 +174,11 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
         eos = (nxt.numpy() == tk.eos) & ~done
         if structure:                                   # [EOS] starts the closing group; it ends with the group
             ending |= eos
-            done_now = ending & ~done & (t % 8 == 7)
+            done_now = ending & ~done & (u % 8 == 7)
         else: done_now = eos
         length[done_now] = t + 1
         done |= done_now
         if done.all(): break
         if cache and t + 1 < max_len: logits = model.extend(nxt[:, None], state)[:, -1]
-    out = [seqs[i, :length[i]].numpy().copy() for i in range(n)]
+    out = [seqs[i, offset:length[i]].numpy().copy() for i in range(n)]
     return (out, torch.stack(all_logits, 1)) if return_logits else out
