@@ -87,7 +87,7 @@ def main():
     out_json.write_text(json.dumps(res, indent=1))
     print(json.dumps(res, indent=1))
     if not a.no_ship:
-        shutil.copyfile(run / "loss.png", root / "results" / "elm_loss.png"); shutil.copyfile(run / "log.csv", root / "results" / "elm_log.csv")
+        shutil.copyfile(run / "loss.png", root / "results" / "elm_loss.png")  # the log itself stays in the run
         shutil.copyfile(run / a.ckpt, WEIGHTS / "elm.pt"); shutil.copyfile(run / "tokenizer.json", WEIGHTS / "elm.tok.json")
         ar = state["args"]
         rows = "\n".join(f"| {k} | {s[k]:.4g} | {r.get(k, float('nan')):.4g} |" for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD") ) + \
