@@ -27,6 +27,7 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         raise TreebookError(f"{message} (see '{self.prog} --help')")
 
+# %% ../nbs/11_cli.ipynb #65092f2f
 def _out_path(path: str, suffixes: tuple, what: str) -> Path:
     "Check, before any work, that `path` ends in one of `suffixes` and can be written."
     p = Path(path)
@@ -38,6 +39,7 @@ def _out_path(path: str, suffixes: tuple, what: str) -> Path:
     can_write_in(p.parent, p)
     return p
 
+# %% ../nbs/11_cli.ipynb #20914aa4
 @contextlib.contextmanager
 def _unmade_on_error(made):
     "After an error, remove the folders in `made` (made for the outputs) that are left empty."
@@ -47,6 +49,7 @@ def _unmade_on_error(made):
             if d.is_dir() and not any(d.iterdir()): d.rmdir()
         raise
 
+# %% ../nbs/11_cli.ipynb #c2d4bd20
 def _model_arg(model):
     "A --model that is a path (a / or .pt in it) must be a checkpoint file; a name is looked up by the library."
     s = str(model)
@@ -57,6 +60,7 @@ def _model_arg(model):
     if not p.is_file(): raise TreebookError(f"no such model file: {p}")
     return model
 
+# %% ../nbs/11_cli.ipynb #0ef0f298
 def save_image(img, path) -> Path:
     "Save a PIL image atomically (.png or .jpg)."
     from treebook.tree import _atomic_write
@@ -82,6 +86,7 @@ def cmd_info(args):
              else ""))
     return 0
 
+# %% ../nbs/11_cli.ipynb #708e9c01
 def cmd_export(args):
     from treebook.tree import Tree
     from treebook import mesh
@@ -92,6 +97,7 @@ def cmd_export(args):
     else: p = mesh.export_mesh(t, out, sides=args.sides, leaves=args.leaves, seed=args.seed)
     print(f"wrote {p}"); return 0
 
+# %% ../nbs/11_cli.ipynb #226dccc7
 def cmd_render(args):
     from treebook.tree import Tree
     from treebook.render import render
@@ -135,6 +141,7 @@ def write_trees(trees, out_dir, stem: str = "tree", mesh: bool = True, picture: 
                     paths.append(save_image(render(m, size=(512, 512)), name.with_suffix(".png")))
     return paths
 
+# %% ../nbs/11_cli.ipynb #5a7ef128
 def cmd_grammar(args):
     from treebook.wavelet import infer_grammar, compression_header, compression_line
     out = _out_path(args.out, (".json",), "a grammar file")
@@ -144,6 +151,7 @@ def cmd_grammar(args):
     print("stages (s): " + ", ".join(f"{k} {v:.3f}" for k, v in t.items() if k != "total"))
     print(f"wrote {g.save(out)}"); return 0
 
+# %% ../nbs/11_cli.ipynb #3d3e65eb
 def cmd_enhance(args):
     from treebook.wavelet import enhance
     out_folder(args.out)
@@ -151,6 +159,7 @@ def cmd_enhance(args):
     for p in write_trees([t], args.out, "enhanced", picture=args.render, seed=args.seed): print(f"wrote {p}")
     return 0
 
+# %% ../nbs/11_cli.ipynb #181034de
 def cmd_propagate(args):
     from treebook.lsystem import propagate
     out_folder(args.out)
@@ -196,6 +205,7 @@ def cmd_train(args):
 
 MAX_SAMPLES = 100_000   # `sample --n`: drawn in batches of bounded memory, written when all are drawn
 
+# %% ../nbs/11_cli.ipynb #93356f04
 def cmd_sample(args):
     from treebook.train import sample_trees
     out_folder(args.out); _model_arg(args.model)
@@ -211,6 +221,7 @@ def _sampling_threads():
     import torch
     torch.set_num_threads(1)
 
+# %% ../nbs/11_cli.ipynb #95a2c819
 def cmd_grow(args):
     from treebook.growth import grow_sequence, write_growth
     out, made = out_folder(args.out); _model_arg(args.model)
@@ -221,6 +232,7 @@ def cmd_grow(args):
     for p in paths: print(f"wrote {p}")
     return 0
 
+# %% ../nbs/11_cli.ipynb #1024b069
 def cmd_complete(args):
     from treebook.tree import Tree
     from treebook.growth import complete
@@ -234,6 +246,7 @@ def cmd_complete(args):
     for p in paths: print(f"wrote {p}")
     return 0
 
+# %% ../nbs/11_cli.ipynb #ae8e6bde
 def _read_image(path):
     from PIL import Image, UnidentifiedImageError
     p = Path(path)
@@ -242,9 +255,11 @@ def _read_image(path):
     try:
         img = Image.open(p); img.load()
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
-        raise TreebookError(f"cannot read {p} as an image ({str(e).splitlines()[0][:80]}): give a PNG or JPEG") from None
+        raise TreebookError(f"cannot read {p} as an image ({str(e).splitlines()[0][:80]}): "
+                            f"give a PNG or JPEG") from None
     return img
 
+# %% ../nbs/11_cli.ipynb #fae41737
 def _cmd_condition(kind):
     def run(args):
         from treebook import condition
@@ -279,6 +294,7 @@ def demo_step(key: str, name: str):
         DEMO_STEPS[key] = (name, f); return f
     return register
 
+# %% ../nbs/11_cli.ipynb #92e1d87e
 @demo_step("tree", "an example tree: saved, meshed, exported, rendered")
 def _demo_tree(out: Path, seed: int):
     from treebook.tree import example_tree
@@ -289,6 +305,7 @@ def _demo_tree(out: Path, seed: int):
     return [t.save(out / "tree.npz"), export_mesh(m, out / "tree.obj"), export_mesh(m, out / "tree.glb"),
             export_skeleton(t, out / "tree_skeleton.ply"), save_image(render(m, size=(512, 512)), out / "tree.png")]
 
+# %% ../nbs/11_cli.ipynb #8ba865c7
 def _lazy_step(target: str, sub: str):
     ("A demo step that imports `module:function` only when it runs, writing into the subfolder `sub` of the demo's "
      "folder.")
@@ -313,6 +330,7 @@ for key, name, target, sub in [
         ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.growth:demo_growth", "growth")]:
     demo_step(key, name)(_lazy_step(target, sub))
 
+# %% ../nbs/11_cli.ipynb #0bf7c2b8
 def cmd_demo(args):
     out, made = out_folder(args.out)
     keys = list(DEMO_STEPS) if args.steps is None else [k.strip() for k in args.steps.split(",") if k.strip()]
@@ -341,25 +359,31 @@ def _grid_size(s: str) -> int:
     if g & (g - 1): raise argparse.ArgumentTypeError(f"must be a power of two in 8..1024 (64, 128, 256...), got {s!r}")
     return g
 
-def build_parser() -> argparse.ArgumentParser:
-    "The `treebook` argument parser with all subcommands."
-    from treebook import __version__
-    SEED = flag_number(int, 0, 2 ** 32 - 1)
-    p = _Parser(prog="treebook", description="Learn, generate and reconstruct 3D trees.")
-    p.add_argument("--version", action="version", version=f"treebook {__version__}")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+# %% ../nbs/11_cli.ipynb #2a5a137f
+_SEED = flag_number(int, 0, 2 ** 32 - 1)   # the type of every --seed
+
+# %% ../nbs/11_cli.ipynb #c07f2d5e
+def _add_demo(sub):
+    "The `treebook demo` subcommand."
     s = sub.add_parser("demo", help="run the tour of treebook on shipped data (offline)",
                        description="Run every demo step; write the results into --out.")
     s.add_argument("--out", default="treebook-demo", help="output folder (default: treebook-demo)")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--steps", default=None,
                    help=f"comma-separated steps to run (default: all of {', '.join(DEMO_STEPS)})")
     s.set_defaults(func=cmd_demo)
+
+def _add_info(sub):
+    "The `treebook info` subcommand."
     s = sub.add_parser("info", help="describe a tree file",
                        description="Print branch count, height, depth and bounding box of a tree (.npz or .json).")
     s.add_argument("tree", help="tree file (.npz or .json)")
     s.add_argument("--json", action="store_true", help="print the numbers as JSON")
     s.set_defaults(func=cmd_info)
+
+# %% ../nbs/11_cli.ipynb #cd063f5a
+def _add_export(sub):
+    "The `treebook export` subcommand."
     s = sub.add_parser("export", help="write a tree as a mesh (OBJ, GLB, PLY) or a skeleton PLY",
                        description="Mesh a tree with generalized cylinders and write it; --skeleton writes nodes and "
                        "edges instead.")
@@ -369,8 +393,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write the skeleton (PLY: x y z radius per node, edges) instead of a mesh")
     s.add_argument("--sides", type=flag_number(int, 3, 256), default=10, help="vertices around each ring (default: 10)")
     s.add_argument("--leaves", action="store_true", help="add procedural leaves on the tips")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed for the leaves (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed for the leaves (default: 0)")
     s.set_defaults(func=cmd_export)
+
+# %% ../nbs/11_cli.ipynb #020c0de7
+def _add_render(sub):
+    "The `treebook render` subcommand."
     s = sub.add_parser("render", help="draw a tree into a PNG",
                        description="Render a tree offscreen (pyvista, or matplotlib when no OpenGL).")
     s.add_argument("tree", help="tree file (.npz or .json)")
@@ -383,6 +411,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--backend", default="auto", choices=["auto", "pyvista", "matplotlib"],
                    help="renderer (default: auto)")
     s.set_defaults(func=cmd_render)
+
+# %% ../nbs/11_cli.ipynb #10bc4bb3
+def _add_generate(sub):
+    "The `treebook generate` subcommand."
     s = sub.add_parser("generate", help="grow a dataset of procedural trees",
                        description="Grow trees of one species into sharded .npz files plus manifest.json (resumable).")
     s.add_argument("--species", required=True, help="elm, hickory, shadbush, spruce, tulip or vitellaria")
@@ -396,41 +428,59 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--trees", action="store_true",
                    help="also write every tree as its own .npz (trees/tree_00000.npz, ...)")
     s.add_argument("--workers", type=flag_number(int, 1, 256), default=2, help="worker processes (default: 2)")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_generate)
-    def scan_args(s):
-        s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
-        s.add_argument("--grid", type=_grid_size, default=128,
-                       help="voxel grid size, a power of two >= 8 (default: 128)")
-        s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
-        s.add_argument("--symmetrize", action="store_true",
-                       help="mirror the scan about the vertical plane through the root first")
+
+# %% ../nbs/11_cli.ipynb #cd5289d7
+def _scan_args(s):
+    "The arguments of the commands that read a scan into a voxel grid."
+    s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
+    s.add_argument("--grid", type=_grid_size, default=128,
+                   help="voxel grid size, a power of two >= 8 (default: 128)")
+    s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
+    s.add_argument("--symmetrize", action="store_true",
+                   help="mirror the scan about the vertical plane through the root first")
+
+def _add_grammar(sub):
+    "The `treebook grammar` subcommand."
     s = sub.add_parser("grammar", help="infer a wavelet shape grammar from a scan",
                        description="Voxelise a scan, decompose it with 3D Haar wavelets, build a tree per dyad and "
                        "infer L-system productions (Friedman and Stamos 2013).")
-    scan_args(s)
+    _scan_args(s)
     s.add_argument("--v", type=flag_number(float, 0), default=0.2,
                    help="lossy compression threshold on orthonormal Haar coefficients (default: 0.2)")
     s.add_argument("--out", required=True, help="grammar file (.json)")
     s.set_defaults(func=cmd_grammar)
+
+# %% ../nbs/11_cli.ipynb #2681cb54
+def _add_enhance(sub):
+    "The `treebook enhance` subcommand."
     s = sub.add_parser("enhance", help="add detail to a scan's skeleton with its own grammar",
                        description="Infer the grammar of a scan and apply its productions to grow finer levels than "
                        "were scanned.")
-    scan_args(s)
+    _scan_args(s)
     s.add_argument("--levels", type=flag_number(int, 0, 4), default=1, help="finer levels to add (default: 1)")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_enhance)
+
+# %% ../nbs/11_cli.ipynb #161cca31
+def _add_propagate(sub):
+    "The `treebook propagate` subcommand."
     s = sub.add_parser("propagate", help="grow new trees from a grammar",
                        description="Grow n different trees like the scanned one from a grammar JSON.")
     s.add_argument("grammar", help="grammar file written by `treebook grammar`")
     s.add_argument("--n", type=flag_number(int, 1, 10_000), default=5, help="number of trees (default: 5)")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG picture per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_propagate)
+
+# %% ../nbs/11_cli.ipynb #2d0650b2
+def _add_reconstruct(sub):
+    "The `treebook reconstruct` subcommand."
     s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan",
                        description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic "
                        "skeleton (classic), then join one connected tree in the scan's frame and units (one per stem "
@@ -450,12 +500,20 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
                    help="when the scan seems to hold several trees: join them into one (default, with a warning), keep "
                    "the largest, or write all (OUT_1, OUT_2 ...)")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.set_defaults(func=cmd_reconstruct)
+
+# %% ../nbs/11_cli.ipynb #cf823b5d
+def _add_train(sub):
+    "The `treebook train` subcommand."
     s = sub.add_parser("train", help="train a tree transformer on a dataset", add_help=False,
                        description="Train a TreeTransformer (see `treebook train --help`).")
     s.add_argument("rest", nargs=argparse.REMAINDER, help="the options of `treebook train`")
     s.set_defaults(func=cmd_train)
+
+# %% ../nbs/11_cli.ipynb #d868390e
+def _add_sample(sub):
+    "The `treebook sample` subcommand."
     s = sub.add_parser("sample", help="sample trees from a shipped model",
                        description="Sample trees from a pretrained HourglassTree model.")
     s.add_argument("--n", type=flag_number(int, 1, MAX_SAMPLES), default=16, help="number of trees (default: 16)")
@@ -467,31 +525,45 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--top-k", type=flag_number(int, 1), default=None,
                    help="keep only the k likeliest tokens (default: off)")
     s.add_argument("--no-structure", action="store_true", help="turn structure-aware decoding off")
-    s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG per tree")
     s.add_argument("--out", required=True, help="output folder")
     s.set_defaults(func=cmd_sample)
-    def sampling_args(s, model):
-        s.add_argument("--model", default=model,
-                       help=f"shipped model name or a checkpoint path (default: {model or 'the one for this input'})")
-        s.add_argument("--temperature", type=flag_number(float, 0), default=0.9,
-                       help="sampling temperature (default: 0.9)")
-        s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=0.95,
-                       help="nucleus sampling mass (default: 0.95)")
-        s.add_argument("--seed", type=SEED, default=0, help="random seed (default: 0)")
-        s.add_argument("--out", required=True, help="output folder")
+
+# %% ../nbs/11_cli.ipynb #d1f498e1
+def _sampling_args(s, model):
+    "The sampling arguments of `grow`, `complete` and the conditioned commands."
+    s.add_argument("--model", default=model,
+                   help=f"shipped model name or a checkpoint path (default: {model or 'the one for this input'})")
+    s.add_argument("--temperature", type=flag_number(float, 0), default=0.9,
+                   help="sampling temperature (default: 0.9)")
+    s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=0.95,
+                   help="nucleus sampling mass (default: 0.95)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
+    s.add_argument("--out", required=True, help="output folder")
+
+def _add_grow(sub):
+    "The `treebook grow` subcommand."
     s = sub.add_parser("grow", help="sample a growing tree: one tree per growth stage",
                        description="Sample the stages of one growing tree from a growth model; writes stage_XX.npz, "
                        "meshes, a filmstrip PNG and a GIF.")
     s.add_argument("--stages", type=flag_number(int, 1, 1000), default=10, help="number of stages (default: 10)")
-    sampling_args(s, "elm-grow")
+    _sampling_args(s, "elm-grow")
     s.set_defaults(func=cmd_grow)
+
+# %% ../nbs/11_cli.ipynb #d6033f00
+def _add_complete(sub):
+    "The `treebook complete` subcommand."
     s = sub.add_parser("complete", help="complete a partial tree",
                        description="Use a partial tree as the prompt and sample completions that keep its branches.")
     s.add_argument("partial", help="partial tree (.npz or .json)")
     s.add_argument("--n", type=flag_number(int, 1, 10_000), default=4, help="number of completions (default: 4)")
-    sampling_args(s, "elm")
+    _sampling_args(s, "elm")
     s.set_defaults(func=cmd_complete)
+
+# %% ../nbs/11_cli.ipynb #79df4abf
+def _add_conditioned(sub):
+    "The `sketch2tree`, `points2tree` and `image2tree` subcommands."
     for name, kind, what in (("sketch2tree", "sketch",
                               "a 2D sketch: a .json list of [x0, y0, x1, y1] segments or an .svg of lines"),
                              ("points2tree", "points",
@@ -511,10 +583,23 @@ def build_parser() -> argparse.ArgumentParser:
                            help="sample this many trees per output and keep the one whose outline matches best "
                            "(default: 4)")
         s.add_argument("--render", action="store_true", help="also write a PNG per tree")
-        sampling_args(s, None)
+        _sampling_args(s, None)
         s.set_defaults(func=_cmd_condition(kind))
+
+# %% ../nbs/11_cli.ipynb #298af021
+_SUBCOMMANDS = (_add_demo, _add_info, _add_export, _add_render, _add_generate, _add_grammar, _add_enhance,
+                _add_propagate, _add_reconstruct, _add_train, _add_sample, _add_grow, _add_complete, _add_conditioned)
+
+def build_parser() -> argparse.ArgumentParser:
+    "The `treebook` argument parser with all subcommands."
+    from treebook import __version__
+    p = _Parser(prog="treebook", description="Learn, generate and reconstruct 3D trees.")
+    p.add_argument("--version", action="version", version=f"treebook {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for add in _SUBCOMMANDS: add(sub)
     return p
 
+# %% ../nbs/11_cli.ipynb #4828a5c8
 def _say_warning(message, category, filename, lineno, file=None, line=None):
     "How the command shows a warning: one line on stderr, `warning: ...`, without the source line."
     print(f"warning: {message}", file=sys.stderr)
@@ -529,17 +614,20 @@ _FOR_THE_SHELL = [(" (an empty tree is only allowed with allow_empty=True)", "")
                   ("generate_dataset / treebook generate", "`treebook generate`"),
                   ("(pass up='y' for y-up files)", "(pass --up y for y-up files)")]
 
+# %% ../nbs/11_cli.ipynb #d0ca3b8d
 def _for_the_shell(message: str) -> str:
     "A library message as one line for the command line."
     import re
     for lib, shell in _FOR_THE_SHELL: message = message.replace(lib, shell)
     return re.sub(r"\[Errno \d+\] ", "", " ".join(message.split()))
 
+# %% ../nbs/11_cli.ipynb #73caa6d1
 def _quiet_stdout():
     "The reader closed the pipe (`treebook info X | head -1`): send what is left to /dev/null, as `head` expects."
     try: os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     except (OSError, ValueError): pass
 
+# %% ../nbs/11_cli.ipynb #daa5396a
 def main(argv=None) -> int:
     """Entry point of the `treebook` command; returns the exit status: 2 for a user error (one line on stderr),
     130 after Ctrl-C, 141 when the reader of the output closed the pipe (quietly, like any Unix tool)."""

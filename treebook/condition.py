@@ -55,6 +55,7 @@ class QueryPrompt(nn.Module):
         y = self.ln_out(y + self.mlp(y))
         return F.pad(y, (0, 0, 0, self.length - self.n_queries))
 
+# %% ../nbs/10a_condition.ipynb #30d8973a
 class SetEncoder(nn.Module):
     "Features of a set of `in_dim`-vectors (points, segments): an MLP each, then one self-attention layer."
     def __init__(self, in_dim: int, dim: int, heads: int = 4):
@@ -64,6 +65,7 @@ class SetEncoder(nn.Module):
 
     def forward(self, x, mask=None): return self.layer(self.mlp(x), src_key_padding_mask=mask)
 
+# %% ../nbs/10a_condition.ipynb #d3a4bad5
 class ImageEncoder(nn.Module):
     "A small CNN: (B, 1, 112, 112) -> 49 feature vectors (B, 49, dim) with learned positions."
     def __init__(self, dim: int, width: int = 16):
@@ -102,19 +104,23 @@ def _image_gray(image) -> np.ndarray:
     if a.max() - a.min() < 1e-3: raise TreebookError("the image is blank: there is no tree to read")
     return np.clip(a, 0, 1)
 
+# %% ../nbs/10a_condition.ipynb #16da26ed
 def _resized(a, size):
     from PIL import Image
     return np.asarray(Image.fromarray((a * 255).astype(np.uint8)).resize((size, size), Image.BILINEAR),
                       np.float32) / 255.0
 
+# %% ../nbs/10a_condition.ipynb #ea91f742
 def image_input(image) -> np.ndarray:
     "(112, 112) float32 in [0, 1], tree bright, from a (H, W[, C]) array, a PIL image or an image file."
     return _resized(_image_gray(image), IMAGE_INPUT)
 
+# %% ../nbs/10a_condition.ipynb #130068a5
 def silhouette_target(image, size: int = 224) -> np.ndarray:
     "(size, size) bool mask (True = tree) of an image, in the frame of the front camera (`scan.silhouette`)."
     return _resized(_image_gray(image), size) > 0.5
 
+# %% ../nbs/10a_condition.ipynb #651c3c11
 def sketch_input(lines) -> np.ndarray:
     "(m, 4) float32 segments x0 z0 x1 z1 in the canonical frame from image-coordinate segments (y down); at most 256."
     a = np.asarray(lines, np.float64)
@@ -132,6 +138,7 @@ def sketch_input(lines) -> np.ndarray:
     if len(out) > MAX_LINES: out = out[np.random.default_rng(0).choice(len(out), MAX_LINES, replace=False)]
     return out.astype(np.float32)
 
+# %% ../nbs/10a_condition.ipynb #ff80fbca
 def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
     ("(size, size) bool mask of prepared sketch `segments` (m, 4: x0 z0 x1 z1, canonical) drawn `width` pixels wide by "
      "the front camera.")
@@ -143,6 +150,7 @@ def sketch_target(segments, size: int = 224, width: int = 2) -> np.ndarray:
         draw.line([tuple(a), tuple(b)], fill=255, width=width)
     return np.asarray(img) > 0
 
+# %% ../nbs/10a_condition.ipynb #040dd9f6
 def points_input(points, seed: int = 0, up: str = "z"):
     ("(Frame, (200, 3) float32 points in that frame): the cloud (array or scan file; `up` its vertical axis) resampled "
      "to 200 points, base at the origin, height 1.")
@@ -209,6 +217,7 @@ def _batch_cond(kind, items):
     for i, a in enumerate(items): x[i, :len(a)] = a; mask[i, :len(a)] = False
     return torch.from_numpy(x), torch.from_numpy(mask)
 
+# %% ../nbs/10a_condition.ipynb #5e5726b9
 class ConditionalTree(nn.Module):
     "Encoder + 50-query prompt + hourglass decoder: a tree conditioned on an image, a sketch or points."
     def __init__(self, kind: str, decoder: TreeTransformer, n_queries: int = N_QUERIES, heads: int = 4,
@@ -260,8 +269,9 @@ class ConditionalTree(nn.Module):
 
 # %% ../nbs/10a_condition.ipynb #67fb5fa3
 class Glimpse(nn.Module):
-    """Features of the input at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens so far
-    (a picture seen from the front), or with `volume` a 3D CNN's maps sampled at the last x, y and z (a cloud's voxel grid)."""
+    """Features of the input at the point being drawn: for each token, a CNN's maps sampled at the last x and z tokens
+    so far (a picture seen from the front), or with `volume` a 3D CNN's maps sampled at the last x, y and z (a cloud's
+    voxel grid)."""
     def __init__(self, dim: int, tok: Tokenizer | None = None, width: int | None = None, volume: bool = False):
         super().__init__()
         self.volume = volume
@@ -315,6 +325,7 @@ class Glimpse(nn.Module):
                  for m in maps]
         return self.out(torch.cat(feats + [known.float()], -1)) * known, (lx[:, -1], ly[:, -1], lz[:, -1])
 
+# %% ../nbs/10a_condition.ipynb #439d79de
 def stroke_images(x, mask=None) -> torch.Tensor:
     ("(B, 1, 112, 112) pictures of prepared sketches `x` (B, m, 4) (True in `mask`: padding), drawn by the front "
      "camera (`sketch_target`).")
@@ -323,6 +334,7 @@ def stroke_images(x, mask=None) -> torch.Tensor:
                      k in zip(x.cpu().numpy(), ok)])
     return torch.from_numpy(pics)[:, None].to(x.device)
 
+# %% ../nbs/10a_condition.ipynb #5d152f2f
 def point_volumes(x, size: int = 32) -> torch.Tensor:
     ("(B, 1, size, size, size) grids (z, y, x) of prepared clouds `x` (B, n, 3): points per voxel of the camera's "
      "window (y as wide as x), blurred, at most 1.")
@@ -332,10 +344,11 @@ def point_volumes(x, size: int = 32) -> torch.Tensor:
     # (B, n, 3) voxel of each point
     i = ((x - lo) / (hi - lo) * size).long().clamp(0, size - 1)
     flat = (i[..., 2] * size + i[..., 1]) * size + i[..., 0]
-    g = torch.zeros(x.shape[0], size ** 3, device=x.device).scatter_add_(1, flat,
-                                                                         torch.ones(flat.shape, device=x.device)).view(-1, 1, size, size, size)
+    g = (torch.zeros(x.shape[0], size ** 3, device=x.device)
+         .scatter_add_(1, flat, torch.ones(flat.shape, device=x.device)).view(-1, 1, size, size, size))
     return F.avg_pool3d(g, 3, 1, 1).mul(27 / 4).clamp(max=1.0)
 
+# %% ../nbs/10a_condition.ipynb #c4bdfdff
 @contextmanager
 def glimpsing(decoder: TreeTransformer, glimpse: Glimpse | None, maps):
     ("Within the block, `decoder` adds the `glimpse` of image `maps` to every token's embedding (tokens must come in "
@@ -361,6 +374,7 @@ def condition_of(kind: str, tree: Tree, seed: int = 0):
         return points_input(sample_surface(tree, 4 * N_POINTS, seed), seed)[1]
     raise TreebookError(f"unknown condition {kind!r}: use one of {', '.join(KINDS)}")
 
+# %% ../nbs/10a_condition.ipynb #3a2bb0e2
 def cond_batch(kind: str, trees, tok: Tokenizer, step: int, batch_size: int = 8, seed: int = 0, order: str = "dfs",
                augment_data: bool = True):
     "(x, mask, seqs) for training: trees drawn by (seed, step), augmented, with their conditions and sequences."
@@ -374,8 +388,8 @@ def cond_batch(kind: str, trees, tok: Tokenizer, step: int, batch_size: int = 8,
 # %% ../nbs/10a_condition.ipynb #987dbe2a
 @torch.no_grad()
 def input_reliance(model: ConditionalTree, batch) -> dict:
-    """Loss of `batch` = (x, mask, seqs) with each tree's own condition and with another's (the conditions rolled by one):
-    {'own', 'other', 'gap'} in nats per token; a model that ignores its input has gap 0."""
+    """Loss of `batch` = (x, mask, seqs) with each tree's own condition and with another's (the conditions rolled by
+    one): {'own', 'other', 'gap'} in nats per token; a model that ignores its input has gap 0."""
     x, mask, seqs = batch
     own = float(model.loss((x, mask, seqs)))
     other = float(model.loss((torch.roll(x, 1, 0), None if mask is None else torch.roll(mask, 1, 0), seqs)))
@@ -394,6 +408,7 @@ def save_conditional(model: ConditionalTree, tok: Tokenizer, path, **meta) -> Pa
     tok.save(path.with_suffix(".tok.json"))
     return _atomic_write(path, lambda f: torch.save(ck, f))
 
+# %% ../nbs/10a_condition.ipynb #7be6c8b7
 def load_conditional(model="elm-image"):
     "(ConditionalTree, Tokenizer) from a shipped name, a .pt path, or such a pair (returned as it is)."
     if isinstance(model, (tuple, list)) and len(model) == 2: return model
@@ -422,6 +437,7 @@ def load_conditional(model="elm-image"):
     m.load_state_dict(ck["state_dict"])
     return m.eval(), Tokenizer.load(tp)
 
+# %% ../nbs/10a_condition.ipynb #c521556b
 @torch.no_grad()
 def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: float = 0.9, top_p: float | None = 0.95,
                        top_k: int | None = None, progress: bool = False) -> list:
@@ -438,32 +454,36 @@ def sample_conditional(model, cond, n: int = 1, seed: int = 0, temperature: floa
 # %% ../nbs/10a_condition.ipynb #f499f10d
 def image_to_tree(image, n: int = 1, seed: int = 0, model="elm-image", fit: bool = False, candidates: int = 1,
                   **kw) -> list:
-    """`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file). With `candidates` > 1 each
-    tree is the best of that many samples by silhouette IoU; with `fit` its branch ends are moved onto the silhouette
-    (`fit_silhouette`, below)."""
+    """`n` trees (canonical frame) for a front-view silhouette image (array, PIL image or file). With `candidates` > 1
+    each tree is the best of that many samples by silhouette IoU; with `fit` its branch ends are moved onto the
+    silhouette (`fit_silhouette`, below)."""
     _check_candidates(candidates)
     trees = sample_conditional(model, image_input(image), n * candidates, seed, **kw)
     return _choose(trees, n, candidates, fit, lambda: silhouette_target(image))
 
+# %% ../nbs/10a_condition.ipynb #bc51f9c0
 def sketch_to_tree(lines, n: int = 1, seed: int = 0, model="elm-sketch", fit: bool = False, candidates: int = 1,
                    **kw) -> list:
-    """`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of them.
-    `fit` and `candidates` as for `image_to_tree`, with the strokes (`sketch_target`) as the outline to match."""
+    """`n` trees (canonical frame) for a 2D sketch: segments (m, 4) in image coordinates, or a .json / .svg file of
+    them. `fit` and `candidates` as for `image_to_tree`, with the strokes (`sketch_target`) as the outline to match."""
     _check_candidates(candidates)
     q = sketch_input(read_lines(lines))
     return _choose(sample_conditional(model, q, n * candidates, seed, **kw), n, candidates, fit,
                    lambda: sketch_target(q))
 
+# %% ../nbs/10a_condition.ipynb #52dac88e
 def _check_candidates(candidates):
     if not isinstance(candidates, (int, np.integer)) or candidates < 1:
         raise TreebookError(f"candidates must be a whole number >= 1, got {candidates!r}")
 
+# %% ../nbs/10a_condition.ipynb #016c1bcb
 def _choose(trees, n, candidates, fit, target):
     "Of each run of `candidates` trees the best by outline (fitted first if `fit`); `target()` makes the mask."
     if not fit and candidates == 1: return trees
     m = target()
     return [best_by_silhouette(trees[k * candidates:(k + 1) * candidates], m, fit)[0] for k in range(n)]
 
+# %% ../nbs/10a_condition.ipynb #61daa223
 def points_to_tree(points, n: int = 1, seed: int = 0, model="elm-points", up: str = "z", **kw) -> list:
     "`n` trees for a point cloud (array or scan file; `up` 'z' or 'y'), in the cloud's own frame and units (z up)."
     frame, q = points_input(points, seed, up)
@@ -479,6 +499,7 @@ def silhouette_scores(pred, target) -> dict:
     return {"iou": tp / max((p | t).sum(), 1), "precision": prec, "recall": rec, "f1": 2 * prec
             * rec / max(prec + rec, 1e-12)}
 
+# %% ../nbs/10a_condition.ipynb #6991d2c3
 def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool = False, candidates: int = 1,
                    **kw) -> dict:
     ("Mean silhouette IoU / precision / recall / F1 of image-to-tree on held-out canonical `trees` (`fit`, "
@@ -490,6 +511,7 @@ def evaluate_image(model, trees, seed: int = 0, progress: bool = True, fit: bool
         rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
     return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
 
+# %% ../nbs/10a_condition.ipynb #8deb0381
 def evaluate_points(model, trees, baseline=None, seed: int = 0, progress: bool = True, **kw) -> dict:
     ("Mean Chamfer distance input points <-> generated surface for points-to-tree and (if given) an unconditional "
      "(net, tok) baseline.")
@@ -522,12 +544,13 @@ def _pulls(P, dist, row, col, max_px):
     to = np.column_stack([x0 + (k + 0.5) / size * (x1 - x0), z1 - (r + 0.5) / size * (z1 - z0)])
     return np.where(go[:, None], to - P[:, [0, 2]], 0.0)
 
+# %% ../nbs/10a_condition.ipynb #0c16d34e
 def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_px: float = 4,
                    max_px: float = 40) -> Tree:
-    """`tree` pulled in x and z onto the mask `target` (in the frame of `scan.silhouette`); depth, radii and topology kept.
-    Each of `steps` rounds pulls every node the camera sees outside the mask (and within `max_px` pixels of it) towards its
-    nearest mask pixel, smooths the pulls along the tree and moves the nodes `rate` of the way; a last step puts the nodes
-    within `snap_px` pixels of the mask onto it."""
+    """`tree` pulled in x and z onto the mask `target` (in the frame of `scan.silhouette`); depth, radii and topology
+    kept. Each of `steps` rounds pulls every node the camera sees outside the mask (and within `max_px` pixels of it)
+    towards its nearest mask pixel, smooths the pulls along the tree and moves the nodes `rate` of the way; a last step
+    puts the nodes within `snap_px` pixels of the mask onto it."""
     from scipy import ndimage
     m = np.asarray(target) > 0
     if m.ndim != 2 or m.shape[0] != m.shape[1]:
@@ -537,7 +560,8 @@ def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_
         if not np.isfinite(v) or v < 0: raise TreebookError(f"{name} must be a number >= 0, got {v!r}")
     if not tree.n: return tree
     dist, (row, col) = ndimage.distance_transform_edt(~m, return_indices=True)
-    # nodes: the end of each branch (node i), then the start of each root branch; a branch starts at its parent's end node
+    # nodes: the end of each branch (node i), then the start of each root branch;
+    # a branch starts at its parent's end node
     n, roots = tree.n, np.flatnonzero(tree.parent < 0)
     first = np.where(tree.parent >= 0, tree.parent, 0); first[roots] = n + np.arange(len(roots))
     P = np.vstack([tree.end[:, :3], tree.start[roots, :3]]).astype(np.float64)
@@ -557,6 +581,7 @@ def fit_silhouette(tree: Tree, target, steps: int = 16, rate: float = 0.5, snap_
     start[:, :3], end[:, :3] = P[first], P[:n]
     return Tree(start, end, tree.parent, **tree.attrs)
 
+# %% ../nbs/10a_condition.ipynb #245cd324
 def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> tuple:
     ("(tree, scores): of `trees` (each fitted first if `fit`), the one whose silhouette has the highest IoU with the "
      "mask `target`.")

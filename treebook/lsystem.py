@@ -16,6 +16,11 @@ from scipy.spatial import cKDTree
 
 from .tree import Tree, TreebookError, _atomic_write, read_json
 
+# %% auto #0
+__all__ = ['GRAMMAR_VERSION', 'tree_nodes', 'nodes_tree', 'mst_tree', 'simplify', 'frames', 'productions', 'Grammar',
+           'grammar_from_trees', 'derive', 'grow', 'perturb', 'axiom_tree', 'propagate', 'skeleton_points', 'chamfer']
+
+# %% ../nbs/08a_lsystem.ipynb #5fe08de2
 def _knn_graph(p, k):
     m = len(p)
     d, nb = cKDTree(p).query(p, k=min(k + 1, m))
@@ -25,6 +30,7 @@ def _knn_graph(p, k):
     key, first = np.unique(a * m + b, return_index=True)
     return a[first], b[first], w[first]
 
+# %% ../nbs/08a_lsystem.ipynb #78f5ba51
 def _join_components(p, a, b, w):
     "Add edges joining each component to its nearest other one until the graph is connected."
     m = len(p)
@@ -40,6 +46,7 @@ def _join_components(p, a, b, w):
         ea, eb, ew = map(np.array, zip(*add))
         a, b, w = np.concatenate([a, ea]), np.concatenate([b, eb]), np.concatenate([w, ew])
 
+# %% ../nbs/08a_lsystem.ipynb #14634ac0
 def _mst_nodes(p, k, root=None):
     ("(nodes, node parents) of the minimum spanning tree of the k-NN graph of `p`, rooted at node `root` (default the "
      "lowest), parents first.")
@@ -53,12 +60,14 @@ def _mst_nodes(p, k, root=None):
     par = np.full(m, -1, np.int64); par[1:] = new[pred[order[1:]]]
     return p[order], par
 
+# %% ../nbs/08a_lsystem.ipynb #18b8c345
 def tree_nodes(tree: Tree):
     ("(nodes (m, 3), node parents (m,)) of a tree with one root point: node 0 is the root, node i + 1 the end of "
      "branch i.")
     p = np.concatenate([tree.start[:1, :3], tree.end[:, :3]]).astype(np.float64)
     return p, np.concatenate([[-1], tree.parent + 1]).astype(np.int64)
 
+# %% ../nbs/08a_lsystem.ipynb #4ce57125
 def nodes_tree(p, par, trunk_radius: float | None = None, tip: float | None = None, exponent: float = 2.5) -> Tree:
     "The `Tree` through nodes `p` (m, 3) with node parents `par` (par[0] = -1, par[i] < i); pipe-model radii."
     p = np.asarray(p, np.float64); par = np.asarray(par, np.int64); m = len(p)
@@ -69,9 +78,11 @@ def nodes_tree(p, par, trunk_radius: float | None = None, tip: float | None = No
     tree = Tree(s, e, par[1:] - 1, check=False)
     if tip is None:
         n_leaves = max(len(tree.leaves), 1)
-        tip = trunk_radius / n_leaves ** (1 / exponent) if trunk_radius and np.isfinite(trunk_radius) else 0.25 * float(np.median(tree.lengths))
+        tip = (trunk_radius / n_leaves ** (1 / exponent) if trunk_radius and np.isfinite(trunk_radius)
+               else 0.25 * float(np.median(tree.lengths)))
     return tree.with_pipe_radii(tip=max(tip, 1e-6), exponent=exponent)
 
+# %% ../nbs/08a_lsystem.ipynb #cb2d0031
 def mst_tree(nodes, k: int = 8, trunk_radius: float | None = None, tip: float | None = None,
              exponent: float = 2.5) -> Tree:
     ("One connected `Tree` through `nodes` (m, 3): minimum spanning tree of the k-NN graph, rooted at the lowest node, "
@@ -81,10 +92,6 @@ def mst_tree(nodes, k: int = 8, trunk_radius: float | None = None, tip: float | 
     p = np.unique(p, axis=0)
     if len(p) < 2: raise TreebookError(f"a tree needs at least 2 distinct nodes, got {len(p)}")
     return nodes_tree(*_mst_nodes(p, k), trunk_radius=trunk_radius, tip=tip, exponent=exponent)
-
-# %% auto #0
-__all__ = ['GRAMMAR_VERSION', 'tree_nodes', 'nodes_tree', 'mst_tree', 'simplify', 'frames', 'productions', 'Grammar',
-           'grammar_from_trees', 'derive', 'grow', 'perturb', 'axiom_tree', 'propagate', 'skeleton_points', 'chamfer']
 
 # %% ../nbs/08a_lsystem.ipynb #5b6144f9
 def simplify(p, par, h: float, spur: float = 1.5, smooth: int = 3, alpha: float = 0.5, angle: float = 25.0,
@@ -141,12 +148,14 @@ def frames(d) -> np.ndarray:
     U = np.cross(H, Lv)
     return np.stack([H, Lv, U], axis=2)
 
+# %% ../nbs/08a_lsystem.ipynb #77a0761a
 def _seg_dist(p, a, b):
     "Distance from points p (m, k, 3) to segments a-b (m, k, 3)."
     ab = b - a
     t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0, 1)
     return np.linalg.norm(a + t[..., None] * ab - p, axis=-1)
 
+# %% ../nbs/08a_lsystem.ipynb #5efc526e
 def productions(coarse: Tree, fine: Tree, h: float, k: int = 6) -> dict:
     ("Productions from `coarse` vectors to the `fine` vectors they own, in parent turtle frames, lengths in units of "
      "`h`.")
@@ -187,17 +196,20 @@ def _json_safe(x):
     if isinstance(x, float) and not np.isfinite(x): return None
     return x
 
+# %% ../nbs/08a_lsystem.ipynb #cc93a3cf
 def _turns(v) -> tuple:
     "(yaw, pitch) in degrees turning heading (1, 0, 0) of a local frame to direction v."
     yaw = np.degrees(np.arctan2(v[1], v[0])); pitch = np.degrees(np.arctan2(v[2], np.hypot(v[0], v[1])))
     return float(yaw), float(pitch)
 
+# %% ../nbs/08a_lsystem.ipynb #3f040e1a
 def _turn_str(yaw, pitch) -> str:
     s = ""
     if abs(yaw) >= 0.5: s += f"{'+' if yaw > 0 else '-'}({abs(yaw):.0f})"
     if abs(pitch) >= 0.5: s += f"{'^' if pitch > 0 else '&'}({abs(pitch):.0f})"
     return s
 
+# %% ../nbs/08a_lsystem.ipynb #f5aa3188
 @dataclass
 class Grammar:
     "A stochastic L-system read off a scan's wavelet dyads: axiom vectors, productions in turtle frames, spatial scale."
@@ -291,17 +303,20 @@ class Grammar:
                     axiom_parent=np.array(d["axiom_parent"], np.int64) if d.get("axiom_parent") is not None else None)
         except (KeyError, TypeError, ValueError) as e:
             raise TreebookError(f"{path} is not a complete grammar ({type(e).__name__}: {e})") from None
-        if len(g.ptr) != g.n_rules + 1 or g.ptr[-1] != len(g.offset) or len(g.axiom_start) < 1 or len(g.link) != len(g.offset) or len(g.rel) != g.n_rules:
+        if (len(g.ptr) != g.n_rules + 1 or g.ptr[-1] != len(g.offset) or len(g.axiom_start) < 1
+                or len(g.link) != len(g.offset) or len(g.rel) != g.n_rules):
             raise TreebookError(f"{path} is inconsistent: rule and child counts do not match")
         return g
 
+# %% ../nbs/08a_lsystem.ipynb #cafd0378
 def grammar_from_trees(trees: dict, h: dict, origin, axiom_level=None, trunk_radius=float("nan"), meta=None) -> Grammar:
     "A `Grammar` from dyad trees {level: Tree} with voxel edges {level: h}: productions between consecutive levels."
     levels = sorted(trees)
     if len(levels) < 2: raise TreebookError("a grammar needs trees at two or more dyad levels; use a finer grid")
     # two levels above the finest (a quarter of its resolution), unless that is too bare to be a tree
     if axiom_level is None:
-        axiom_level = levels[-3] if len(levels) >= 3 and trees[levels[-3]].n >= 24 else next((j for j in levels[:-1] if trees[j].n >= 24), levels[-2])
+        axiom_level = (levels[-3] if len(levels) >= 3 and trees[levels[-3]].n >= 24
+                       else next((j for j in levels[:-1] if trees[j].n >= 24), levels[-2]))
     if axiom_level not in trees or axiom_level == levels[-1]:
         raise TreebookError(f"axiom level must be one of {levels[:-1]}, got {axiom_level}")
     parts = []
@@ -330,6 +345,7 @@ def _rule_index(g: Grammar):
                                                      * g.rule_level]))
     return g.__dict__["_kd"]
 
+# %% ../nbs/08a_lsystem.ipynb #fd8a23c2
 def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
     ("(nodes (m, 3), node parents (m,)) of the tree one level finer: one stochastic production applied to every branch "
      "of `tree` (at `level`).")
@@ -378,6 +394,7 @@ def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
         made[b] = mine if mine else base
     return P[:m], np.array(out_par, np.int64)
 
+# %% ../nbs/08a_lsystem.ipynb #b92cb31a
 def grow(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4) -> Tree:
     "The tree one level finer: derive children of every branch, then `simplify` at the finer voxel size."
     p, par = derive(g, tree, level, seed, k)
@@ -385,6 +402,7 @@ def grow(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4) -> Tree:
     p, par = simplify(p, par, g.voxel(level + 1), spur=0.0)
     return nodes_tree(p, par, trunk_radius=g.trunk_radius)
 
+# %% ../nbs/08a_lsystem.ipynb #5dac0bb6
 def perturb(tree: Tree, angle: float = 10.0, seed=0, trunk_radius=None) -> Tree:
     ("`tree` with every limb (a branch that is not its parent's main continuation) turned about its base by a random "
      "angle (normal, `angle` degrees).")
@@ -409,6 +427,7 @@ def perturb(tree: Tree, angle: float = 10.0, seed=0, trunk_radius=None) -> Tree:
         rot[i] = Rm; out[i] = out[par[i]] + Rm @ vec[i]
     return nodes_tree(out, par, trunk_radius=trunk_radius)
 
+# %% ../nbs/08a_lsystem.ipynb #dddd9e9c
 def axiom_tree(g: Grammar) -> Tree:
     ("The axiom as a `Tree` (its stored topology; grammars saved before version 2 are re-linked by a minimum spanning "
      "tree).")
@@ -418,6 +437,7 @@ def axiom_tree(g: Grammar) -> Tree:
     e = np.column_stack([g.axiom_end, np.zeros(len(g.axiom_end))])
     return Tree(s, e, g.axiom_parent, check=False).with_pipe_radii(tip=1e-3)
 
+# %% ../nbs/08a_lsystem.ipynb #492fe50f
 def propagate(g: Grammar, n: int = 5, seed: int = 0, jitter: float = 10.0, k: int = 4, to_level=None) -> list:
     ("`n` new trees like the scanned one: turn the axiom's limbs by about `jitter` degrees (halving each level), grow "
      "level by level with random rule choices.")
@@ -450,6 +470,7 @@ def skeleton_points(tree: Tree, n: int = 4000) -> np.ndarray:
     q = s[i] + u[:, None] * (e - s)[i] - s[tree.roots[0]]
     return q / max(float(np.ptp(np.concatenate([s[:, 2], e[:, 2]]))), 1e-12)
 
+# %% ../nbs/08a_lsystem.ipynb #cfa8139d
 def chamfer(a: Tree, b: Tree, n: int = 4000) -> float:
     ("Symmetric Chamfer distance between the skeletons of `a` and `b`, each rooted at the origin and divided by its "
      "height.")

@@ -163,8 +163,8 @@ def tree_mesh(
 MESH_FORMATS = (".obj", ".glb", ".ply")
 
 def export_mesh(obj, path, **mesh_kw) -> Path:
-    """Write a mesh (or a Tree, meshed with `tree_mesh(**mesh_kw)` and moved to its `origin`) to .obj, .glb or .ply, atomically.
-    OBJ and PLY keep double precision (map coordinates); glTF stores float32."""
+    """Write a mesh (or a Tree, meshed with `tree_mesh(**mesh_kw)` and moved to its `origin`) to .obj, .glb or .ply,
+    atomically. OBJ and PLY keep double precision (map coordinates); glTF stores float32."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in MESH_FORMATS:

@@ -17,6 +17,10 @@ from .tree import TreebookError
 
 POINT_FORMATS = (".xyz", ".txt", ".pts", ".csv", ".ply", ".pcd", ".las", ".laz", ".e57", ".npy")
 
+# %% auto #0
+__all__ = ['POINT_FORMATS', 'check_points', 'up_to_z', 'read_points']
+
+# %% ../nbs/08b_pointio.ipynb #65d7dabc
 def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.ndarray:
     "`p` as a float64 (n, 3) array of usable points, or a `TreebookError` naming what is wrong."
     if np.asarray(p).dtype.kind == "c": raise TreebookError(f"{name} holds complex numbers; points are real x, y, z")
@@ -39,6 +43,7 @@ def check_points(p, name: str = "the point cloud", min_points: int = 10) -> np.n
         raise TreebookError(f"all {len(p)} points of {name} lie on one line: there is no tree to read")
     return p
 
+# %% ../nbs/08b_pointio.ipynb #60a4b65d
 def _fields(line: str) -> tuple:
     ("(delimiter for `np.loadtxt`, decimal comma?, fields) of one line of a text scan: ';', ',', tab or spaces; "
      "'1,5;2,5;3,5' has decimal commas.")
@@ -49,10 +54,12 @@ def _fields(line: str) -> tuple:
     comma = d == ";" and any("," in x for x in f)
     return d, comma, [x.replace(",", ".") for x in f] if comma else f
 
+# %% ../nbs/08b_pointio.ipynb #6d0e09c3
 def _is_number(s: str) -> bool:
     try: float(s); return True
     except ValueError: return False
 
+# %% ../nbs/08b_pointio.ipynb #e9acdbfe
 def _read_text(path: Path, look: int = 50) -> np.ndarray:
     ("Rows of numbers of a text scan; leading lines that are not points (names of columns, a .pts point count) are "
      "skipped.")
@@ -83,6 +90,7 @@ def _read_text(path: Path, look: int = 50) -> np.ndarray:
                                 f"a line: x y z [more columns]") from None
     return a[:, :3]
 
+# %% ../nbs/08b_pointio.ipynb #49c991c4
 def _bad_line(path: Path, skip: int, d, comma: bool) -> str:
     "Which line of a text scan `np.loadtxt` could not read, and why, in words."
     width = None
@@ -97,6 +105,7 @@ def _bad_line(path: Path, skip: int, d, comma: bool) -> str:
             elif len(fields) != width: return f"line {k} has {len(fields)} values where the lines before have {width}"
     return "its rows of numbers do not line up"
 
+# %% ../nbs/08b_pointio.ipynb #080b8bd8
 @contextmanager
 def _quiet_stderr():
     ("Silence what C libraries (RPly, libE57) print on the process's stderr: the command says what went wrong in one "
@@ -111,6 +120,7 @@ def _quiet_stderr():
     try: yield
     finally: os.dup2(saved, fd); os.close(saved); os.close(null)
 
+# %% ../nbs/08b_pointio.ipynb #bdac5cb8
 def _looks_like(path: Path, magic: tuple, what: str):
     ("A `TreebookError` unless the file starts with one of `magic` (random bytes say 'not a .ply file', not a parser's "
      "dump).")
@@ -118,6 +128,7 @@ def _looks_like(path: Path, magic: tuple, what: str):
     if not any(head.startswith(m) for m in magic):
         raise TreebookError(f"{path} is not {what} file (it does not start like one)")
 
+# %% ../nbs/08b_pointio.ipynb #c2282e5d
 def _read_o3d(path: Path) -> np.ndarray:
     import open3d as o3d
     if path.suffix.lower() == ".ply": _looks_like(path, (b"ply\n", b"ply\r\n"), "a .ply")
@@ -125,6 +136,7 @@ def _read_o3d(path: Path) -> np.ndarray:
     with _quiet_stderr(): pc = o3d.io.read_point_cloud(str(path))
     return np.asarray(pc.points, dtype=np.float64).reshape(-1, 3)
 
+# %% ../nbs/08b_pointio.ipynb #b891074a
 def _read_las(path: Path) -> np.ndarray:
     import laspy
     try: las = laspy.read(path)
@@ -133,6 +145,7 @@ def _read_las(path: Path) -> np.ndarray:
                             f"lazrs`") from None
     return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
 
+# %% ../nbs/08b_pointio.ipynb #c12353cb
 def _read_e57(path: Path) -> np.ndarray:
     "All the scans of an E57 file in its common frame (each scan turned and moved by its pose), one after the other."
     try: import pye57
@@ -147,6 +160,7 @@ def _read_e57(path: Path) -> np.ndarray:
     parts = [np.column_stack([s["cartesianX"], s["cartesianY"], s["cartesianZ"]]) for s in scans]
     return np.vstack(parts).astype(np.float64) if parts else np.zeros((0, 3))
 
+# %% ../nbs/08b_pointio.ipynb #bba73492
 def _read_npy(path: Path) -> np.ndarray:
     _looks_like(path, (b"\x93NUMPY",), "a .npy")
     try: a = np.load(path, allow_pickle=False)
@@ -161,12 +175,14 @@ def _read_npy(path: Path) -> np.ndarray:
                             f"y, z")
     return a[:, :3].astype(np.float64)
 
+# %% ../nbs/08b_pointio.ipynb #be7fea5b
 def up_to_z(p: np.ndarray, up: str = "z") -> np.ndarray:
     "Points turned so that the axis `up` ('z' or 'y') points along +z (right-handed: y-up (x, y, z) -> (x, -z, y))."
     if up == "z": return p
     if up == "y": return np.column_stack([p[:, 0], -p[:, 2], p[:, 1]])
     raise TreebookError(f"`up` must be 'z' or 'y' (the vertical axis of the file), got {up!r}")
 
+# %% ../nbs/08b_pointio.ipynb #876cf058
 def read_points(src, up: str = "z") -> np.ndarray:
     ("Points of a scan as (n, 3) float64 with z up, from a path (.xyz .txt .pts .csv .ply .pcd .las .laz .e57 .npy) or "
      "an array.")
@@ -185,6 +201,3 @@ def read_points(src, up: str = "z") -> np.ndarray:
         p, name = reader(path), str(path)
     else: p, name = src, "the point cloud"
     return up_to_z(check_points(p, name), up)
-
-# %% auto #0
-__all__ = ['POINT_FORMATS', 'check_points', 'up_to_z', 'read_points']

@@ -40,6 +40,7 @@ def sequence_loss(model, seqs) -> tuple:
     loss = F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
     return loss, int((target != PAD).sum())
 
+# %% ../nbs/05_train.ipynb #db153fd9
 @torch.no_grad()
 def perplexity(model, seqs, batch_size: int = 8, progress: bool = False) -> dict:
     "{'loss', 'ppl', 'tokens'} of `model` on the sequences `seqs` (N, L), token-weighted over all of them."
@@ -74,12 +75,14 @@ def _dist_info():
         dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
     return (dist.get_rank(), dist.get_world_size()) if ws > 1 else (0, 1)
 
+# %% ../nbs/05_train.ipynb #d94e7b9e
 def _save_state(path, model, opt, step, epoch, best, config, args, seconds):
     ckpt = {"format": "treebook.train", "version": 1, "step": step, "epoch": epoch, "best_val": best,
             "seconds": seconds,
             "config": asdict(config), "args": args, "model": model.state_dict(), "opt": opt.state_dict()}
     _atomic_write(Path(path), lambda f: torch.save(ckpt, f))
 
+# %% ../nbs/05_train.ipynb #6869fb29
 def _load_state(path):
     path = Path(path)
     if not path.is_file(): raise TreebookError(f"cannot resume: {path} does not exist (train without --resume first)")
@@ -92,6 +95,7 @@ def _load_state(path):
         raise TreebookError(f"{path} is not a treebook training checkpoint")
     return ckpt
 
+# %% ../nbs/05_train.ipynb #4989157e
 def _plot(log_path, png_path):
     import matplotlib; matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -283,15 +287,17 @@ def load_pretrained(model: str = "elm"):
                             f"tokenizer.json")
     return TreeTransformer.load(pt), Tokenizer.load(tok_path)
 
+# %% ../nbs/05_train.ipynb #be98b4ad
 def _batch_seed(seed: int, k: int) -> int:
     "The seed of batch `k` of a large sample (batch 0 keeps `seed`, so a sample that fits one batch is as before)."
     return seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
 
+# %% ../nbs/05_train.ipynb #1e745d48
 def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None,
-                 top_k: int | None = None,
-                 seed: int = 0, structure: bool = True, progress: bool = False, batch_size: int = 256) -> list:
-    """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure` keeps
-    every tree connected. They are drawn `batch_size` at a time, so memory stays bounded however large `n` is."""
+                 top_k: int | None = None, seed: int = 0, structure: bool = True, progress: bool = False,
+                 batch_size: int = 256) -> list:
+    """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure`
+    keeps every tree connected. They are drawn `batch_size` at a time, so memory stays bounded however large `n` is."""
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
     if not (math.isfinite(temperature) and temperature >= 0):
         raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
@@ -313,6 +319,7 @@ def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_
     finally: torch.set_num_threads(threads); bar.close()
     return trees
 
+# %% ../nbs/05_train.ipynb #a9fa5931
 def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
     ("Sample `n` trees from the shipped elm model into `out_dir`: .npz and .obj each, and one PNG grid; returns the "
      "paths.")

@@ -46,6 +46,7 @@ def _points(a, name, dtype=np.float32) -> np.ndarray:
         raise TreebookError(f"`{name}` must have shape (n, 4) for x, y, z, radius; got shape {a.shape}")
     return a
 
+# %% ../nbs/00_tree.ipynb #4f78a4ee
 def _parents(p, n) -> np.ndarray:
     "`p` as an int64 (n,) array of parent indices, or a `TreebookError`."
     p = np.asarray(p)
@@ -62,6 +63,7 @@ def _parents(p, n) -> np.ndarray:
                             f"branch index")
     return p.astype(np.int64)
 
+# %% ../nbs/00_tree.ipynb #f44d583b
 def _cycle_from(parent, i):
     "The cycle reached by following parents from `i`, or None."
     seen, j = [], i
@@ -69,6 +71,7 @@ def _cycle_from(parent, i):
         seen.append(j); j = int(parent[j])
     return seen[seen.index(j):] if j in seen else None
 
+# %% ../nbs/00_tree.ipynb #1693d627
 def _check_topology(parent):
     "Raise if a parent index is out of range, points forward, or closes a cycle."
     n = len(parent)
@@ -85,6 +88,8 @@ def _check_topology(parent):
                                 f"has none")
         raise TreebookError(f"branch {i} has parent {parent[i]} which comes after it: store parents before children "
                             "(for example in DFS order) or build the tree with Tree.from_segments")
+
+# %% ../nbs/00_tree.ipynb #7e38f19b
 def _origin(o) -> np.ndarray:
     "`o` as three finite float64 numbers (None: the world's origin), or a `TreebookError`."
     if o is None: return np.zeros(3)
@@ -199,6 +204,7 @@ def _cached(f):
     wrapper.__name__, wrapper.__doc__ = f.__name__, f.__doc__
     return property(wrapper)
 
+# %% ../nbs/00_tree.ipynb #77b8d08c
 @_cached
 def children(self: Tree) -> list:
     "For each branch, an int64 array of its children, in index order."
@@ -207,6 +213,7 @@ def children(self: Tree) -> list:
     counts = np.bincount(self.parent[idx], minlength=self.n)
     return np.split(order, np.cumsum(counts)[:-1]) if self.n else []
 
+# %% ../nbs/00_tree.ipynb #d3b4d517
 @_cached
 def depth(self: Tree) -> np.ndarray:
     "Number of ancestors of each branch (0 for a root)."
@@ -265,10 +272,12 @@ def take(self: Tree, idx, tol: float = 1e-4) -> Tree:
     return Tree(self.start[idx], self.end[idx], parent, tol=tol, allow_empty=True, origin=self.origin,
                 **{k: v[idx] for k, v in self._attrs.items()})
 
+# %% ../nbs/00_tree.ipynb #97ae762e
 def reorder(self: Tree, kind: str = "dfs", key=None) -> Tree:
     "The same tree with its branches stored in `kind` order ('dfs' or 'bfs')."
     return self.take(self.order(kind, key))
 
+# %% ../nbs/00_tree.ipynb #64d2a6f3
 def subtree(self: Tree, i: int) -> Tree:
     "Branch `i` and all its descendants, as a tree of its own."
     if not -self.n <= i < self.n: raise TreebookError(f"no branch {i} in a tree of {self.n} branches")
@@ -277,6 +286,7 @@ def subtree(self: Tree, i: int) -> Tree:
         keep[j] = keep[self.parent[j]] if self.parent[j] >= 0 else False
     return self.take(np.flatnonzero(keep))
 
+# %% ../nbs/00_tree.ipynb #76904b39
 def prefix(self: Tree, k: int, order: str = "dfs") -> Tree:
     "The first `k` branches in `order` ('dfs' or 'bfs'): always a tree, stored in that order."
     if not 1 <= k <= self.n: raise TreebookError(f"prefix length must be in 1..{self.n}, got {k}")
@@ -324,6 +334,7 @@ def _map(self: Tree, f, rscale: float = 1.0) -> Tree:
         out.append(b)
     return Tree(*out, self.parent, check=False, allow_empty=True, origin=o, **self._attrs)
 
+# %% ../nbs/00_tree.ipynb #d54fd5c3
 def with_origin(self: Tree, origin=None) -> Tree:
     ("The same tree, its positions given about `origin` (x, y, z; None: the world's origin, which folds any origin "
      "into the positions).")
@@ -335,22 +346,26 @@ def with_origin(self: Tree, origin=None) -> Tree:
         out.append(b)
     return Tree(*out, self.parent, check=False, allow_empty=True, origin=o, **self._attrs)
 
+# %% ../nbs/00_tree.ipynb #ed51403f
 def translate(self: Tree, offset) -> Tree:
     "Move the tree by `offset` (x, y, z)."
     offset = np.asarray(offset, dtype=np.float64).reshape(3)
     return self._map(lambda p: p + offset)
 
+# %% ../nbs/00_tree.ipynb #e5668c9e
 def scale(self: Tree, s: float) -> Tree:
     "Scale positions and radii by `s` about the origin."
     if not np.isfinite(s) or s <= 0: raise TreebookError(f"scale must be a positive number, got {s}")
     return self._map(lambda p: p * s, s)
 
+# %% ../nbs/00_tree.ipynb #173c0199
 def rotate_z(self: Tree, angle: float) -> Tree:
     "Rotate by `angle` radians about the z axis (counter-clockwise seen from above)."
     c, s = np.cos(angle), np.sin(angle)
     m = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
     return self._map(lambda p: p @ m.T)
 
+# %% ../nbs/00_tree.ipynb #c7b3d420
 def mirror(self: Tree, axis: str = "x") -> Tree:
     "Reflect the tree across the vertical plane that negates `axis` ('x' or 'y')."
     if axis not in ("x", "y"): raise TreebookError(f"mirror axis must be 'x' or 'y', got {axis!r}")
@@ -358,14 +373,16 @@ def mirror(self: Tree, axis: str = "x") -> Tree:
     def f(p): p = p.copy(); p[:, k] *= -1; return p
     return self._map(f)
 
+# %% ../nbs/00_tree.ipynb #e023e985
 def too_far(magnitude: float, extent: float) -> bool:
     ("Whether float32 positions as large as `magnitude` cannot hold detail of 1e-5 x `extent` (map coordinates need an "
      "origin).")
     return bool(np.spacing(np.float32(magnitude)) > 1e-5 * max(float(extent), 1e-30))
 
+# %% ../nbs/00_tree.ipynb #918d968d
 def origin_for(points):
-    """An origin for the float64 positions `points` (m, 3) when float32 cannot hold them to 1e-5 of their extent (map coordinates):
-    their centre, rounded to a power of ten near their extent; None when they need none."""
+    """An origin for the float64 positions `points` (m, 3) when float32 cannot hold them to 1e-5 of their extent
+    (map coordinates): their centre, rounded to a power of ten near their extent; None when they need none."""
     p = np.asarray(points, np.float64).reshape(-1, 3)
     if not len(p): return None
     ext = max(float(np.linalg.norm(np.ptp(p, 0))), 1e-30)
@@ -373,12 +390,15 @@ def origin_for(points):
     step = 10.0 ** np.ceil(np.log10(ext))
     return np.round(p.mean(0) / step) * step
 
+# %% ../nbs/00_tree.ipynb #ff22d90c
 def _placed(tree: Tree, origin) -> Tree:
     "The same positions as `tree`, now about `origin` (so the tree moves by the change of origin)."
     return Tree(tree.start, tree.end, tree.parent, check=False, allow_empty=True, origin=origin, **tree.attrs)
 
-Tree._map, Tree.with_origin, Tree.translate, Tree.scale, Tree.rotate_z, Tree.mirror = _map, with_origin, translate, scale, rotate_z, mirror
+Tree._map, Tree.with_origin, Tree.translate = _map, with_origin, translate
+Tree.scale, Tree.rotate_z, Tree.mirror = scale, rotate_z, mirror
 
+# %% ../nbs/00_tree.ipynb #6160fe5a
 @dataclass(frozen=True)
 class Frame:
     "The map into a canonical frame: p_canonical = (p - origin) * scale, radius * scale."
@@ -398,6 +418,7 @@ class Frame:
     @classmethod
     def from_dict(cls, d): return cls(tuple(float(v) for v in d["origin"]), float(d["scale"]))
 
+# %% ../nbs/00_tree.ipynb #b80fcdf3
 def normalize(self: Tree):
     "(canonical tree, Frame): branch 0's start at the origin, height above it 1."
     if not self.n: raise TreebookError("cannot normalise an empty tree")
@@ -417,14 +438,16 @@ _PENDING = []   # while an `all_or_nothing` block is open: the [(temporary file,
 def _umask() -> int:
     m = os.umask(0o022); os.umask(m); return m
 
+# %% ../nbs/00_tree.ipynb #dc45499a
 def _os_reason(e: OSError, folder: Path) -> str:
     "What an OSError means to the person who asked for the file."
     if e.errno == errno.ENOENT and folder.exists(): return f"the folder {folder} does not take new files"
     return (e.strerror or str(e)).lower()
 
+# %% ../nbs/00_tree.ipynb #0fc0c1c9
 def _atomic_write(path: Path, write):
-    """Call `write(file)` on a temporary file beside `path`, then rename it to `path`; the file gets the mode of the umask.
-    An OS error (a full or read-only disk) becomes a `TreebookError` naming the path, and leaves nothing behind.
+    """Call `write(file)` on a temporary file beside `path`, then rename it to `path`; the file gets the mode of the
+    umask. An OS error (a full or read-only disk) becomes a `TreebookError` naming the path, and leaves nothing behind.
     Inside an `all_or_nothing` block the rename waits for the block's end."""
     path = Path(path)
     if not path.parent.is_dir(): raise TreebookError(f"cannot write {path}: folder {path.parent} does not exist")
@@ -442,6 +465,7 @@ def _atomic_write(path: Path, write):
         raise
     return path
 
+# %% ../nbs/00_tree.ipynb #e08ce21d
 @contextmanager
 def all_or_nothing(folders=()):
     """Within the block, files written by treebook appear only when the block ends without an error, all together;
@@ -461,6 +485,7 @@ def all_or_nothing(folders=()):
             for t, _ in done[k:]: Path(t).unlink(missing_ok=True)
             raise TreebookError(f"cannot write {path}: {_os_reason(e, path.parent)}") from None
 
+# %% ../nbs/00_tree.ipynb #34611961
 def can_write_in(folder: Path, target: Path):
     "Make and remove a file in `folder`: a full disk, a read-only one or a folder that takes no files says so now."
     try:
@@ -469,6 +494,7 @@ def can_write_in(folder: Path, target: Path):
     except OSError as e:
         raise TreebookError(f"cannot write {target}: {_os_reason(e, Path(folder))}") from None
 
+# %% ../nbs/00_tree.ipynb #e26aa72a
 def out_folder(path: str) -> tuple:
     "Check, before any work, that the output folder `path` can be made and written: (folder, the folders to make)."
     p = Path(path)
@@ -478,6 +504,7 @@ def out_folder(path: str) -> tuple:
     can_write_in(q, p)
     return p, made
 
+# %% ../nbs/00_tree.ipynb #9429abf2
 def save(self: Tree, path) -> Path:
     "Write the tree to `path` (.npz or .json), atomically."
     path = Path(path)
@@ -495,6 +522,7 @@ def save(self: Tree, path) -> Path:
         return _atomic_write(path, lambda f: f.write(json.dumps(d).encode()))
     raise TreebookError(f"cannot save a tree as {path.name!r}: use a .npz or .json file name")
 
+# %% ../nbs/00_tree.ipynb #bc2089d8
 def _check_version(v, path, what="tree", newest=FORMAT_VERSION):
     if isinstance(v, np.ndarray) and v.ndim == 0: v = v.item()  # a scalar stored in an .npz
     if not isinstance(v, (int, np.integer)) or isinstance(v, bool):
@@ -503,9 +531,11 @@ def _check_version(v, path, what="tree", newest=FORMAT_VERSION):
         raise TreebookError(f"{path} was written by a newer treebook ({what} format {int(v)}; this one reads up to "
                             f"{newest}): upgrade treebook")
 
+# %% ../nbs/00_tree.ipynb #d2d53b91
 def _not_json(c):
     raise TreebookError(f"holds {c}, which is not a number in JSON")
 
+# %% ../nbs/00_tree.ipynb #c9982eb3
 def read_json(path, fmt: str, newest: int, what: str, version_key: str = "format_version", hint: str = "") -> dict:
     ("The JSON object in `path`, checked to be a treebook `fmt` file of a version this treebook reads (at most "
      "`newest`).")
@@ -524,6 +554,7 @@ def read_json(path, fmt: str, newest: int, what: str, version_key: str = "format
     _check_version(d.get(version_key, 1), path, what, newest)
     return d
 
+# %% ../nbs/00_tree.ipynb #155b7b28
 def _read_npz(path: Path) -> dict:
     "The arrays of an .npz file, or a `TreebookError` saying in a line why not."
     with open(path, "rb") as f: head = f.read(4)
@@ -540,6 +571,7 @@ def _read_npz(path: Path) -> dict:
         raise TreebookError(f"cannot read {path}: it is damaged or incomplete ({str(e).splitlines()[0][:80]}); is the "
                             f"file complete?") from None
 
+# %% ../nbs/00_tree.ipynb #76f989f1
 def _attrs_of_json(a) -> dict:
     "The per-branch arrays of a JSON tree: {name: {'dtype': numpy dtype, 'data': list}}."
     if not isinstance(a, dict): raise TreebookError("`attrs` must map names to {\"dtype\": ..., \"data\": [...]}")
@@ -555,6 +587,7 @@ def _attrs_of_json(a) -> dict:
             raise TreebookError(f"per-branch array {k!r} does not hold {dt} values") from None
     return out
 
+# %% ../nbs/00_tree.ipynb #bf332026
 def _checked_arrays(start, end, parent, origin, attrs) -> dict:
     "The arrays of a tree file, checked; float64 positions that float32 cannot hold get an origin (map coordinates)."
     start, end, origin = _points(start, "start", np.float64), _points(end, "end", np.float64), _origin(origin)
@@ -569,6 +602,7 @@ def _checked_arrays(start, end, parent, origin, attrs) -> dict:
             raise TreebookError(f"per-branch array {k!r} must hold numbers or text, got dtype {v.dtype}")
     return dict(start=start, end=end, parent=parent, origin=origin, **attrs)
 
+# %% ../nbs/00_tree.ipynb #4c1677b5
 def load(cls, path, check: bool = True) -> Tree:
     "Read a tree saved by `Tree.save` (.npz or .json); float64 positions far from the origin are kept about one."
     path = Path(path)
@@ -608,13 +642,14 @@ def flag_number(kind=float, lo=None, hi=None, above=None):
      "most `hi`.")
     what = "a whole number" if kind is int else "a finite number"
     low = f">= {lo:g}" if lo is not None else f"> {above:g}" if above is not None else ""
-    rng = f" in {lo:g}..{hi:g}" if lo is not None and hi is not None else (f" {low}" if low
-                                                                           else "") + (f" <= {hi:g}" if hi is not None and not low else f" and <= {hi:g}" if hi is not None else "")
+    rng = (f" in {lo:g}..{hi:g}" if lo is not None and hi is not None
+           else (f" {low}" if low else "")
+           + (f" <= {hi:g}" if hi is not None and not low else f" and <= {hi:g}" if hi is not None else ""))
     def parse(s):
         try: v = int(s) if kind is int else float(s)
         except (TypeError, ValueError): raise argparse.ArgumentTypeError(f"expected {what}{rng}, got {s!r}") from None
-        if not math.isfinite(v) or (lo is not None and v < lo) or (above is not None
-                                                                   and v <= above) or (hi is not None and v > hi):
+        if (not math.isfinite(v) or (lo is not None and v < lo) or (above is not None and v <= above)
+                or (hi is not None and v > hi)):
             raise argparse.ArgumentTypeError(f"must be {what}{rng}, got {s!r}")
         return v
     parse.__name__ = "whole number" if kind is int else "number"
@@ -630,6 +665,7 @@ def info(self: Tree) -> dict:
             "max_radius": float(max(self.start[:, 3].max(), self.end[:, 3].max())),
             "attrs": sorted(self._attrs), **({"origin": self.origin.tolist()} if self.origin.any() else {})}
 
+# %% ../nbs/00_tree.ipynb #b8608178
 def with_pipe_radii(self: Tree, tip: float = 0.01, exponent: float = 2.5) -> Tree:
     "The same tree with radii by the pipe model: tips `tip`, r^exponent summed over children at each fork."
     if tip <= 0 or exponent <= 0: raise TreebookError("pipe model needs tip > 0 and exponent > 0")

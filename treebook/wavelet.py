@@ -19,7 +19,8 @@ from scipy.spatial import cKDTree
 
 from .tree import Tree, TreebookError, _atomic_write
 from .pointio import read_points, check_points, up_to_z
-from .lsystem import Grammar, grammar_from_trees, grow, propagate, mst_tree, simplify, nodes_tree, _mst_nodes, chamfer
+from .lsystem import (Grammar, grammar_from_trees, grow, propagate, mst_tree, simplify, nodes_tree, _mst_nodes,
+                              chamfer)
 _all_ = ["read_points", "Grammar", "propagate"]   # re-exported: the whole pipeline from one module
 
 DATA = Path(str(importlib.resources.files("treebook"))) / "data" / "scans"
@@ -57,6 +58,7 @@ class Alignment:
                 "scanner_source": self.scanner_source, "trunk_radius": float(self.trunk_radius),
                 "symmetrized": self.symmetrized}
 
+# %% ../nbs/08_wavelet_grammar.ipynb #13e5dc92
 def _fit_circle(xy):
     "Least-squares circle (Kasa): centre (2,), radius."
     m = xy.mean(0); xy = xy - m   # about the points' mean: in map coordinates the squares would swamp the fit
@@ -65,6 +67,7 @@ def _fit_circle(xy):
     (cx, cy, c), *_ = np.linalg.lstsq(A, b, rcond=None)
     return np.array([cx, cy]) + m, float(np.sqrt(max(c + cx * cx + cy * cy, 0.0)))
 
+# %% ../nbs/08_wavelet_grammar.ipynb #bc14c6b4
 def _trunk(p, z0, H):
     "(centre xy, radius, arc direction or None) of the trunk just above the root, or None if it cannot be fitted."
     xy0 = np.median(p[p[:, 2] <= z0 + 0.03 * H, :2], axis=0)
@@ -79,6 +82,7 @@ def _trunk(p, z0, H):
     arc = u / np.linalg.norm(u) if cover < 0.6 and np.linalg.norm(u) > 0.2 else None
     return c, r, arc
 
+# %% ../nbs/08_wavelet_grammar.ipynb #5625714b
 def align(points, up: str = "z", scanner=None, symmetrize: bool = False):
     "(aligned points, Alignment): root at the origin, z up, y from the scanner to the root; optionally mirrored in y."
     p = up_to_z(check_points(points), up)
@@ -110,6 +114,7 @@ def align(points, up: str = "z", scanner=None, symmetrize: bool = False):
 class CoarseGridWarning(UserWarning):
     "The grid is coarse for the tree: expect right-angled, merged branches (paper, section V)."
 
+# %% ../nbs/08_wavelet_grammar.ipynb #3ef4f848
 @dataclass
 class Voxels:
     ("An occupancy grid: `occ` (N, N, N) bool, `origin` (3,) of the grid's corner, `h` the voxel edge, in scan units; "
@@ -146,16 +151,19 @@ class Voxels:
         out[hit] = mean[pos[hit]]
         return out
 
+# %% ../nbs/08_wavelet_grammar.ipynb #fd47f053
 def check_grid(grid) -> int:
     "`grid` as an int power of two >= 8, or a `TreebookError`."
     try: g = int(grid)
     except (TypeError, ValueError):
-        raise TreebookError(f"grid must be a whole number (a power of two such as 64, 128, 256), got {grid!r}") from None
+        raise TreebookError(f"grid must be a whole number (a power of two such as 64, 128, 256), "
+                            f"got {grid!r}") from None
     if g != grid or g < 8 or g & (g - 1):
         raise TreebookError(f"grid must be a power of two >= 8 (64, 128, 256...), got {grid!r}")
     if g > 1024: raise TreebookError(f"grid {g} is too large (at most 1024: {g}^3 voxels would not fit in memory)")
     return g
 
+# %% ../nbs/08_wavelet_grammar.ipynb #8bb171dc
 def voxelize(points, grid: int = 128) -> Voxels:
     ("Occupancy of aligned `points` in a `grid`^3 grid: voxel edge = largest extent / grid, floor at the lowest point, "
      "centred in x and y.")
@@ -182,16 +190,19 @@ def transform(occ) -> pywt.FswavedecnResult:
     check_grid(a.shape[0])
     return pywt.fswavedecn(a, "haar")
 
+# %% ../nbs/08_wavelet_grammar.ipynb #eef28e06
 def inverse(coeffs: pywt.FswavedecnResult) -> np.ndarray:
     "The grid back from its standard decomposition."
     return pywt.fswaverecn(coeffs)
 
+# %% ../nbs/08_wavelet_grammar.ipynb #f811c0c3
 def dyad(coeffs: pywt.FswavedecnResult, j: int) -> np.ndarray:
     "Dyad `j` (0 = coarsest): the block of detail coefficients at level j on all three axes, shape (2**j,)*3."
     L = coeffs.levels[0]
     if not 0 <= j < L: raise TreebookError(f"dyad level must be in 0..{L - 1} for a {2 ** L}^3 grid, got {j}")
     return coeffs[(j + 1,) * 3]
 
+# %% ../nbs/08_wavelet_grammar.ipynb #c4e9d2f3
 def compression(occ, coeffs=None, v: float = 0.2) -> dict:
     ("Paper Table 1: share of zero coefficients (lossless), share below `v` (lossy; pywt's orthonormal Haar) and the "
      "lossy IoU.")
@@ -236,6 +247,7 @@ def pyramid(occ) -> list:
         out.append(a.reshape(n, 2, n, 2, n, 2).any((1, 3, 5)))
     return out[::-1]
 
+# %% ../nbs/08_wavelet_grammar.ipynb #c0434f4d
 def _neighbour_key(a, idx):
     "6-neighbour occupancy code (0..63) of voxels `idx` of grid `a`."
     n = a.shape[0]; key = np.zeros(len(idx), np.int64)
@@ -247,6 +259,7 @@ def _neighbour_key(a, idx):
         key |= hit.astype(np.int64) << b
     return key
 
+# %% ../nbs/08_wavelet_grammar.ipynb #80201fe4
 def _child_pattern(fine, idx):
     "8-bit pattern of the children (in `fine`, twice the resolution) of voxels `idx`."
     pat = np.zeros(len(idx), np.int64)
@@ -255,6 +268,7 @@ def _child_pattern(fine, idx):
         pat |= fine[j[:, 0], j[:, 1], j[:, 2]].astype(np.int64) << c
     return pat
 
+# %% ../nbs/08_wavelet_grammar.ipynb #1a21eac5
 def voxel_rules(occ, transitions: int = 2) -> np.ndarray:
     ("Counts (64, 256): how often a voxel with 6-neighbour key k has child pattern p, over the finest `transitions` "
      "level pairs.")
@@ -265,6 +279,7 @@ def voxel_rules(occ, transitions: int = 2) -> np.ndarray:
         np.add.at(counts, (_neighbour_key(pyr[j], idx), _child_pattern(pyr[j + 1], idx)), 1)
     return counts
 
+# %% ../nbs/08_wavelet_grammar.ipynb #721f2a08
 def super_resolve(occ, counts=None, seed: int = 0) -> np.ndarray:
     "A grid at twice the resolution: each occupied voxel becomes a child pattern drawn from the voxel grammar `counts`."
     occ = np.asarray(occ, bool)
@@ -288,6 +303,7 @@ def super_resolve(occ, counts=None, seed: int = 0) -> np.ndarray:
         out[j[:, 0], j[:, 1], j[:, 2]] = True
     return out
 
+# %% ../nbs/08_wavelet_grammar.ipynb #76f10c0f
 def upsample(occ) -> np.ndarray:
     ("Plain upsampling: invert one more Haar level whose detail coefficients are all zero (each voxel -> a full 2x2x2 "
      "block).")
@@ -296,6 +312,7 @@ def upsample(occ) -> np.ndarray:
     d = {k: z for k in ("aad", "ada", "add", "daa", "dad", "dda", "ddd")}
     return pywt.idwtn({"aaa": a * 2 ** 1.5, **d}, "haar") > 0.5
 
+# %% ../nbs/08_wavelet_grammar.ipynb #a08238b9
 def iou(a, b) -> float:
     "Intersection over union of two boolean grids."
     a, b = np.asarray(a, bool), np.asarray(b, bool)
@@ -313,6 +330,7 @@ def dyad_nodes(coeffs, j: int, means=None, threshold: float = 0.3) -> np.ndarray
     m = means[j]
     return np.argwhere((m > 0) & (d > threshold * m * f ** 1.5))
 
+# %% ../nbs/08_wavelet_grammar.ipynb #8aea886e
 def block_means(occ) -> list:
     "Block means at every level [2^0 grid, ..., N grid] (the Haar approximations, up to a factor per level)."
     out = [np.asarray(occ, np.float32)]
@@ -321,6 +339,7 @@ def block_means(occ) -> list:
         out.append(a.reshape(n, 2, n, 2, n, 2).mean((1, 3, 5)))
     return out[::-1]
 
+# %% ../nbs/08_wavelet_grammar.ipynb #12da56f5
 def dyad_tree(vox: Voxels, idx, j: int, trunk_radius=None, k: int = 8, clean: bool = True,
               root=(0.0, 0.0, 0.0)) -> Tree:
     ("The tree of nodes `idx` of dyad `j` and the scan's `root`: MST through the nodes' point centroids, then "
@@ -334,6 +353,7 @@ def dyad_tree(vox: Voxels, idx, j: int, trunk_radius=None, k: int = 8, clean: bo
     if clean: p, par = simplify(p, par, vox.h * 2.0 ** (vox.levels - j))
     return nodes_tree(p, par, trunk_radius=trunk_radius)
 
+# %% ../nbs/08_wavelet_grammar.ipynb #571b7028
 def dyad_trees(vox: Voxels, coeffs=None, threshold: float = 0.3, min_nodes: int = 4, trunk_radius=None, k: int = 8,
                clean: bool = True) -> dict:
     "{level j: Tree} for every dyad with at least `min_nodes` nodes, in the aligned frame and the scan's units."
@@ -392,6 +412,7 @@ def _infer(scan, grid=128, up="z", scanner=None, symmetrize=False, v=0.2, thresh
               "compression": row, "timings": {k: round(v_, 4) for k, v_ in t.items()}}
     return g, trees, vox, co
 
+# %% ../nbs/08_wavelet_grammar.ipynb #ebaa850e
 def infer_grammar(scan, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False, v: float = 0.2,
                   threshold: float = 0.3, axiom_level=None, compress: bool = True) -> Grammar:
     "Grammar of a scan (path or (n, 3) points); `grammar.meta` holds the compression row and the timings of each stage."
@@ -399,10 +420,13 @@ def infer_grammar(scan, grid: int = 128, up: str = "z", scanner=None, symmetrize
         raise TreebookError(f"the compression threshold v must be a finite number >= 0, got {v}")
     return _infer(scan, grid, up, scanner, symmetrize, v, threshold, axiom_level, compress)[0]
 
+# %% ../nbs/08_wavelet_grammar.ipynb #e3d1604a
 def compression_header() -> str:
     "Header line of the compression table printed by `compression_line`."
-    return f"{'scan':<22}{'grid':>6}{'points':>9}{'occupied':>10}{'lossless':>10}{'lossy(v)':>10}{'IoU':>7}{'rules':>8}{'seconds':>9}"
+    return (f"{'scan':<22}{'grid':>6}{'points':>9}{'occupied':>10}{'lossless':>10}{'lossy(v)':>10}"
+            f"{'IoU':>7}{'rules':>8}{'seconds':>9}")
 
+# %% ../nbs/08_wavelet_grammar.ipynb #72ac113d
 def compression_line(g: Grammar) -> str:
     "One row of the compression table (paper Table 1) for a grammar made by `infer_grammar`."
     r, t = g.meta.get("compression", {}), g.meta.get("timings", {})
@@ -410,6 +434,7 @@ def compression_line(g: Grammar) -> str:
     return (f"{r['scan']:<22}{r['grid']:>6}{r['points']:>9}{r['occupied']:>10}{100 * r['lossless']:>9.2f}%"
             f"{100 * r['lossy']:>9.2f}%{r['lossy_iou']:>7.3f}{r['productions']:>8}{t.get('total', float('nan')):>9.3f}")
 
+# %% ../nbs/08_wavelet_grammar.ipynb #d2fca2f7
 def enhance(scan, levels: int = 1, grid: int = 128, up: str = "z", scanner=None, symmetrize: bool = False,
             seed: int = 0) -> Tree:
     "The scan's finest dyad tree refined `levels` more times by its own productions (more detail than was scanned)."
@@ -421,6 +446,7 @@ def enhance(scan, levels: int = 1, grid: int = 128, up: str = "z", scanner=None,
     for j in range(g.finest, g.finest + levels): t = grow(g, t, j, rng)
     return t
 
+# %% ../nbs/08_wavelet_grammar.ipynb #d23fa6e8
 def demo_grammar(out_dir, seed: int = 0, grid: int = 128, n: int = 3) -> list:
     ("Infer a grammar from the shipped scan, write grammar.json, `n` propagated trees (.npz) and a picture; return the "
      "paths.")
