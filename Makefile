@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.treebook-installed
 FLAGS ?=
 
-.PHONY: install demo test test-slow readme export clean lint
+.PHONY: install demo test test-slow readme book export clean lint
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -34,6 +34,13 @@ test-slow: install
 # README.md from nbs/index.ipynb, executed, hidden cells removed (quarto is not available here).
 readme: install
 	$(PY) scripts/make_readme.py
+
+# Run chapters as nbdev_test does and keep their outputs (figures, show_doc tables) in the notebooks, so that a reader
+# sees them without running anything: `make book` (every chapter) or `make book NBS="nbs/00_tree.ipynb ..."`.
+NBS ?= $(wildcard nbs/*.ipynb)
+book: install
+	$(PY) scripts/run_book.py $(NBS)
+	$(VENV)/bin/nbdev_clean
 
 # What to run before a commit: notebooks are the source.
 export: install

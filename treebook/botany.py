@@ -68,9 +68,8 @@ class Species:
         "A copy with some parameters changed (checked)."
         bad = [k for k in kw if k not in {f.name for f in fields(self)}]
         if bad:
-            raise TreebookError(
-                f"unknown species parameter(s) {', '.join(bad)}: known are {', '.join(f.name for f in fields(self))}"
-            )
+            raise TreebookError(f"unknown species parameter(s) {', '.join(bad)}: known are "
+                                f"{', '.join(f.name for f in fields(self))}")
         return dataclasses.replace(self, **kw)
 
     def to_dict(self) -> dict: return asdict(self)
@@ -88,15 +87,13 @@ def check_species(sp) -> None:
     for k, (lo, hi) in _RANGES.items():
         v = getattr(sp, k)
         if not isinstance(v, (int, float, np.integer, np.floating)) or not np.isfinite(v) or not lo <= v <= hi:
-            raise TreebookError(
-                f"species {sp.name!r}: parameter {k}={v!r} is out of range; it must be between {lo} and {hi}"
-            )
+            raise TreebookError(f"species {sp.name!r}: parameter {k}={v!r} is out of range; it must be between {lo} "
+                                f"and {hi}")
     if sp.shape not in ("ovoid", "cone"):
         raise TreebookError(f"species {sp.name!r}: shape must be 'ovoid' or 'cone', got {sp.shape!r}")
     if sp.phyllotaxis not in ("spiral", "opposite", "whorl"):
-        raise TreebookError(
-            f"species {sp.name!r}: phyllotaxis must be 'spiral', 'opposite' or 'whorl', got {sp.phyllotaxis!r}"
-        )
+        raise TreebookError(f"species {sp.name!r}: phyllotaxis must be 'spiral', 'opposite' or 'whorl', got "
+                            f"{sp.phyllotaxis!r}")
     if sp.crown_base >= sp.height:
         raise TreebookError(f"species {sp.name!r}: crown_base ({sp.crown_base}) must be below height ({sp.height})")
 
@@ -181,38 +178,24 @@ class _Grower:
         d = _unit(np.tile(_Z, (k, 1)) + rng.normal(0, 0.01, (k, 3)))
         p1 = np.cumsum(d * seg, 0); p0 = np.vstack([np.zeros(3), p1[:-1]])
         tip = np.zeros(k, bool); tip[-1] = True
-        self._append(
-            self.i,
-            p0=p0,
-            p1=p1,
-            par=np.arange(k) - 1,
-            cyc=np.zeros(k, int),
-            order=np.zeros(k, int),
-            depth=np.arange(k),
-            main=np.ones(k, bool),
-            alive=np.ones(k, bool),
-            tip=tip,
-            bend=np.zeros(k, bool),
-            brk=tip.copy(),
-        )
+        self._append(self.i, p0=p0, p1=p1, par=np.arange(k) - 1, cyc=np.zeros(k, int), order=np.zeros(k, int),
+                     depth=np.arange(k), main=np.ones(k, bool), alive=np.ones(k, bool), tip=tip,
+                     bend=np.zeros(k, bool), brk=tip.copy())
         if sp.stems > 1:  # co-dominant stems leave the collar, tilted outwards at evenly spread azimuths
             az = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(sp.stems) / sp.stems
-            dirs = _lateral_dirs(
-                np.tile(_Z, (sp.stems, 1)), az, np.deg2rad(sp.branch_angle * 0.5 * rng.uniform(0.5, 1.2, sp.stems))
-            )
+            dirs = _lateral_dirs(np.tile(_Z, (sp.stems, 1)), az,
+                                 np.deg2rad(sp.branch_angle * 0.5 * rng.uniform(0.5, 1.2, sp.stems)))
             self._buds(np.tile(p1[-1], (sp.stems, 1)), dirs, np.full(sp.stems, k - 1), np.ones(sp.stems, bool),
                        np.zeros(sp.stems, int), np.full(sp.stems, k), rng.uniform(0, 2 * np.pi, sp.stems))
         else:
             self._node_buds(np.arange(k), d, np.zeros(k), np.zeros(k, int), tip)
-            self._buds(
-                p1[-1:], d[-1:], np.array([k - 1]), np.ones(1, bool), np.zeros(1, int), np.array([k]), np.zeros(1)
-            )
+            self._buds(p1[-1:], d[-1:], np.array([k - 1]), np.ones(1, bool), np.zeros(1, int), np.array([k]),
+                       np.zeros(1))
 
     def _buds(self, pos, dirs, par, main, order, depth, phi):
         n = len(pos)
-        self._append(
-            self.b, pos=pos, dir=dirs, par=par, main=main, order=order, depth=depth, phi=phi, alive=np.ones(n, bool)
-        )
+        self._append(self.b, pos=pos, dir=dirs, par=par, main=main, order=order, depth=depth, phi=phi,
+                     alive=np.ones(n, bool))
 
     def _node_buds(self, ids, d, phi, order, tip):
         "Lateral buds at the end nodes of internodes `ids` (directions `d`, phyllotaxis azimuths `phi`, axis `order`)."
@@ -343,9 +326,8 @@ class _Grower:
         phi = phi0[rows] + dv * step
         self._node_buds(ids, Dd[sel], phi, ordr, tipm)
         last = ids[tipm]; r = rows[tipm]
-        self._buds(
-            I["p1"][last], Dd[sel][tipm], last, np.ones(len(last), bool), order[acc], dep[tipm] + 1, phi0 + dv * cnt
-        )
+        self._buds(I["p1"][last], Dd[sel][tipm], last, np.ones(len(last), bool), order[acc], dep[tipm] + 1, phi0 + dv
+                   * cnt)
         # free space near the new nodes is taken
         if len(self.markers):
             dist, _ = cKDTree(P1[sel]).query(self.markers, distance_upper_bound=self.sp.occupancy_radius * self.L)
@@ -426,103 +408,25 @@ def _pipe(parent, n, tip, a):
     return tip * w ** (1 / a), tip * mw ** (1 / a)
 
 # %% ../nbs/02_botany.ipynb #88845d01
-SPECIES = {
-    "elm": Species(
-        "elm",
-        height=14,
-        crown_base=3.5,
-        crown_radius=8.0,
-        widest=0.65,
-        markers=3000,
-        internode=0.9,
-        apical_dominance=0.48,
-        vigor=2.0,
-        branch_angle=40,
-        divergence=180,
-        tropism=0.05,
-        lateral_tropism=0.08,
-        wander=0.08,
-        max_branches=200,
-    ),
-    "hickory": Species(
-        "hickory",
-        height=20,
-        crown_base=6.0,
-        crown_radius=5.5,
-        widest=0.45,
-        markers=4000,
-        internode=0.6,
-        apical_dominance=0.56,
-        branch_angle=50,
-        tropism=0.15,
-        lateral_tropism=0.0,
-        max_branches=600,
-    ),
-    "shadbush": Species(
-        "shadbush",
-        height=6,
-        crown_base=0.8,
-        crown_radius=2.8,
-        widest=0.55,
-        markers=3000,
-        internode=0.3,
-        apical_dominance=0.52,
-        branch_angle=35,
-        stems=5,
-        tropism=0.2,
-        lateral_tropism=0.1,
-        max_branches=400,
-    ),
-    "spruce": Species(
-        "spruce",
-        height=20,
-        crown_base=1.5,
-        crown_radius=3.6,
-        shape="cone",
-        markers=5000,
-        internode=0.5,
-        apical_dominance=0.72,
-        vigor=2.5,
-        phyllotaxis="whorl",
-        whorl=5,
-        branch_angle=80,
-        max_order=3,
-        tropism=0.4,
-        lateral_tropism=-0.06,
-        environment=0.2,
-        wander=0.04,
-        max_branches=800,
-    ),
-    "tulip": Species(
-        "tulip",
-        height=26,
-        crown_base=9.0,
-        crown_radius=5.0,
-        widest=0.35,
-        markers=4000,
-        internode=0.7,
-        apical_dominance=0.62,
-        branch_angle=55,
-        tropism=0.25,
-        lateral_tropism=0.03,
-        max_branches=600,
-    ),
-    "vitellaria": Species(
-        "vitellaria",
-        height=10,
-        crown_base=2.5,
-        crown_radius=6.0,
-        widest=0.15,
-        markers=4000,
-        internode=0.55,
-        apical_dominance=0.47,
-        branch_angle=50,
-        tropism=0.02,
-        lateral_tropism=0.0,
-        wander=0.2,
-        max_branches=500,
-    ),
-}
+SPECIES = {"elm": Species("elm", height=14, crown_base=3.5, crown_radius=8.0, widest=0.65, markers=3000, internode=0.9,
+                          apical_dominance=0.48, vigor=2.0, branch_angle=40, divergence=180, tropism=0.05,
+                          lateral_tropism=0.08, wander=0.08, max_branches=200),
+           "hickory": Species("hickory", height=20, crown_base=6.0, crown_radius=5.5, widest=0.45, markers=4000,
+                              internode=0.6, apical_dominance=0.56, branch_angle=50, tropism=0.15, lateral_tropism=0.0,
+                              max_branches=600),
+           "shadbush": Species("shadbush", height=6, crown_base=0.8, crown_radius=2.8, widest=0.55, markers=3000,
+                               internode=0.3, apical_dominance=0.52, branch_angle=35, stems=5, tropism=0.2,
+                               lateral_tropism=0.1, max_branches=400),
+           "spruce": Species("spruce", height=20, crown_base=1.5, crown_radius=3.6, shape="cone", markers=5000,
+                             internode=0.5, apical_dominance=0.72, vigor=2.5, phyllotaxis="whorl", whorl=5,
+                             branch_angle=80, max_order=3, tropism=0.4, lateral_tropism=-0.06, environment=0.2,
+                             wander=0.04, max_branches=800),
+           "tulip": Species("tulip", height=26, crown_base=9.0, crown_radius=5.0, widest=0.35, markers=4000,
+                            internode=0.7, apical_dominance=0.62, branch_angle=55, tropism=0.25, lateral_tropism=0.03,
+                            max_branches=600),
+           "vitellaria": Species("vitellaria", height=10, crown_base=2.5, crown_radius=6.0, widest=0.15, markers=4000,
+                                 internode=0.55, apical_dominance=0.47, branch_angle=50, tropism=0.02,
+                                 lateral_tropism=0.0, wander=0.2, max_branches=500)}
 
 def species(name) -> Species:
     "The preset `Species` called `name` (or `name` itself if it is already a `Species`)."
@@ -550,11 +454,8 @@ def grow_stages(sp, seed: int = 0, stages: int = 10, max_branches: int | None = 
     out = []
     for n in counts:
         rs, re = _pipe(parent, n, sp.tip_radius * g.env[0] / sp.height, sp.pipe_exponent)
-        out.append(
-            Tree(
-                np.column_stack([s[:n], rs]), np.column_stack([e[:n], re]), parent[:n], stage=stage[:n].astype(np.int16)
-            )
-        )
+        out.append(Tree(np.column_stack([s[:n], rs]), np.column_stack([e[:n], re]), parent[:n],
+                        stage=stage[:n].astype(np.int16)))
     if canonical:
         _, frame = out[-1].normalize()
         out = [frame.apply(t) for t in out]
