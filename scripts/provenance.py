@@ -22,3 +22,17 @@ def commit(short: bool = False) -> str:
     c = c[:7] if short else c
     if _git("status", "--porcelain", "--untracked-files=no", "--", ".", *(f":!{p}" for p in OUTPUTS)): c += "+modified"
     return c
+
+
+def record(script: str, res: dict, out, **machine) -> dict:
+    """`res` after the run's command (`script` and this process's arguments), commit, time and machine (`machine`
+    adds to it), written as JSON to `out` (relative to the repository) by way of a temporary name; returns it."""
+    import json, platform, sys, time
+    head = {"command": " ".join(["python", script, *sys.argv[1:]]), "commit": commit(),
+            "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), **machine}}
+    res, out = head | res, ROOT / out
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.part")
+    tmp.write_text(json.dumps(res, indent=1)); tmp.replace(out)
+    return res

@@ -1,5 +1,5 @@
 "The commit that scripts/provenance.py writes into results/ and model cards."
-import sys
+import json, sys
 from pathlib import Path
 
 import pytest
@@ -40,3 +40,16 @@ def test_outputs_do_not_count(monkeypatch):
     provenance.commit()
     status = [a for a in seen if a[0] == "status"][0]
     assert ":!results" in status and ":!treebook/data/weights" in status
+
+
+def test_record(monkeypatch, tmp_path):
+    "A script's record: command, commit, time and machine first, then its numbers; written whole."
+    monkeypatch.setenv("TREEBOOK_COMMIT", "0123456789abcdef")
+    monkeypatch.setattr(sys, "argv", ["x.py", "--n", "3"])
+    res = provenance.record("scripts/x.py", {"score": 0.5, "command": "kept"}, tmp_path / "r" / "x.json", threads=2)
+    back = json.loads((tmp_path / "r" / "x.json").read_text())
+    assert back == res and list(back)[:4] == ["command", "commit", "time", "machine"]
+    assert back["command"] == "kept" and back["commit"] == "0123456789abcdef" and back["score"] == 0.5
+    assert back["machine"]["threads"] == 2 and not list((tmp_path / "r").glob(".*.part"))
+    res = provenance.record("scripts/x.py", {"score": 1}, tmp_path / "y.json")
+    assert res["command"] == "python scripts/x.py --n 3"

@@ -26,8 +26,9 @@ from .sampling import TreeGrammar, sample
 # %% auto #0
 __all__ = ['GROWTH_MODES', 'write_trees', 'growth_order', 'encode_growth', 'decode_growth', 'containment', 'StagedGrammar',
            'wrap_embed', 'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss',
-           'extend_context', 'grow_sequence', 'stage_picture', 'write_growth', 'complete', 'tree_picture',
-           'write_tree_set', 'demo_growth']
+           'grown_histories', 'extend_context', 'grow_sequence', 'stage_picture', 'write_growth', 'complete',
+           'tree_picture', 'write_tree_set', 'branches_per_stage', 'stage_mix', 'growth_scores', 'evaluate_growth',
+           'growth_card', 'completion_check', 'demo_growth']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -290,8 +291,8 @@ def fit(
     progress: bool = True,
     meta: dict | None = None,
 ) -> dict:
-    """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a summary.
-    Batches follow the model to its device: move the model to a GPU first to train there."""
+    """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a
+    summary. Batches follow the model to its device: move the model to a GPU first to train there."""
     from treebook.train import lr_at
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
     last, log_path = out / "last.pt", out / "log.csv"
@@ -332,7 +333,8 @@ def fit(
         if step % log_every == 0 or step == steps:
             with open(log_path, "a") as f:
                 f.write(
-                    f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},{seconds + time.time() - t0:.1f}\n"
+                    f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},"
+                    f"{seconds + time.time() - t0:.1f}\n"
                 )
             running = []
         if step % ckpt_every == 0 or step == steps: save()
@@ -365,6 +367,23 @@ def lm_loss(model, seqs) -> torch.Tensor:
     "Cross-entropy of next-token prediction over non-[PAD] targets (`train.sequence_loss`)."
     from treebook.train import sequence_loss
     return sequence_loss(model, seqs)[0]
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0011
+def grown_histories(seeds, species: str = "elm", stages: int = 10, max_branches: int | None = 200,
+                    cache=None) -> list:
+    "Grown trees (with `stage`) of `species` for `seeds`; with `cache`, read from that .npz, or written to it."
+    if cache is not None and Path(cache).exists():
+        with np.load(cache) as z:
+            a, off = {k: z[k] for k in ("start", "end", "parent", "stage")}, z["offsets"]
+        return [Tree(a["start"][i:j], a["end"][i:j], a["parent"][i:j], stage=a["stage"][i:j])
+                for i, j in zip(off[:-1], off[1:])]
+    from treebook.botany import grow_stages
+    trees = [grow_stages(species, seed=s, stages=stages, max_branches=max_branches)[-1] for s in seeds]
+    if cache is not None:
+        cat = {k: np.concatenate([getattr(t, k) for t in trees]) for k in ("start", "end", "parent", "stage")}
+        off = np.concatenate([[0], np.cumsum([t.n for t in trees])])
+        _atomic_write(Path(cache), lambda f: np.savez(f, offsets=off, **cat))
+    return trees
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #922b72f8
 def _resolve(model):
@@ -533,6 +552,78 @@ def write_tree_set(trees, out_dir, stem: str = "tree", meshes: bool = True, firs
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #19ec39a5
 write_trees = write_tree_set  # the old name (the CLI imports it); `cli.write_trees` writes one file per tree
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0002
+def branches_per_stage(histories, stages: int = 10) -> list:
+    "Mean branch count of each stage over `histories` (lists of stage trees, or grown trees with `stage`), to 0.1."
+    counts = [[int((h.stage <= k).sum()) for k in range(stages)] if isinstance(h, Tree) else [t.n for t in h]
+              for h in histories]
+    return np.mean(counts, 0).round(1).tolist()
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0003
+def stage_mix(histories) -> list:
+    "Histories whose stage k is stage k of history j + k (cyclically): real stages that do not belong together."
+    return [[histories[(j + k) % len(histories)][k] for k in range(len(h))] for j, h in enumerate(histories)]
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0004
+def growth_scores(samples, tok: Tokenizer, data, stages: int = 10) -> dict:
+    """Containment, share of complete histories and branches per stage of sampled `samples` (lists of stage trees),
+    next to the procedural `data` (histories or grown trees)."""
+    return {"containment": float(np.nanmean([containment(h, tok) for h in samples])),
+            "stages_complete": float(np.mean([len(h) == stages and all(t.n for t in h) for h in samples])),
+            "branches_per_stage": {"samples": branches_per_stage(samples, stages),
+                                   "data": branches_per_stage(data, stages)}}
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0014
+def evaluate_growth(net: TreeTransformer, tok: Tokenizer, held, stages: int = 10, samples: int = 16, val: int = 32,
+                    seed: int = 0) -> tuple:
+    """(record, sampled histories) of a growth model: its loss on the first `val` grown trees of `held`, and the
+    `growth_scores` of `samples` histories sampled at temperature 0.9, top-p 0.95 (seeds `seed`, `seed + 1`, ...)."""
+    from treebook.train import perplexity
+    seqs = np.stack([encode_growth(tok, t, stages, length=net.config.max_len) for t in held[:val]])
+    res, t0 = {"val": perplexity(net, seqs, batch_size=4)}, time.time()
+    hs = [decode_growth(tok, generate(net, 1, tok=tok, stages=stages, temperature=0.9, top_p=0.95, seed=seed + i)[0],
+                        stages) for i in range(samples)]
+    res["seconds_sampling"] = time.time() - t0
+    sc = growth_scores(hs, tok, held[:samples], stages)
+    note = "incremental layout: stage k is a prefix of stage k+1 by construction; 1.0 checks the decoding"
+    return res | {"containment": sc.pop("containment"), "containment_note": note} | sc, hs
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0017
+def growth_card(net: TreeTransformer, res: dict) -> str:
+    "The model card (markdown) of a growth model from its record: `evaluate_growth`'s, with run, command and commit."
+    c, r, b, th = net.config, res["run"], res["branches_per_stage"], res["machine"].get("threads", 1)
+    init = f"started from `{r['init']}` (branch positions extended)" if r.get("init") else "trained from scratch"
+    shipped = f"; evaluated and shipped by `{res['command']}`" if "train_command" in res else ""
+    return "\n".join([
+        "# elm-grow: an hourglass transformer that grows elms in ten stages", "",
+        f"- **Data**: the growth histories (`botany.grow('elm', seed, stages=10, max_branches=200)`) of the first "
+        f"{r['trees']} training trees of the `elm` dataset (`data/elm`, same seeds), in the incremental layout of "
+        "`treebook.growth.encode_growth` (each stage's new branches in DFS order, one block of eight [STAGE] tokens "
+        "between stages); rotation about z and mirroring.",
+        f"- **Model**: arch `{c.arch}`, dim {c.dim}, depth {c.depth}, heads {c.heads}, {net.n_params:,} parameters, "
+        f"max_len {c.max_len}; {init}.",
+        f"- **Training**: AdamW, peak lr {r['lr']}, {r['warmup']} warm-up steps then cosine, batch {r['batch']}; "
+        f"{r['step']} of {r['steps_planned']} planned steps in {r['seconds'] / 60:.0f} minutes on {th} "
+        f"thread{'s' if th > 1 else ''} of a 2-core CPU (give --eval-only the training run's --threads).",
+        f"- **Command**: `{res.get('train_command', res['command'])}`{shipped}; commit {res['commit']}.",
+        f"- **Metrics** (`results/growth.json`): held-out loss {res['val']['loss']:.3f} (perplexity "
+        f"{res['val']['ppl']:.1f}) on {r['val_histories']} histories; containment {res['containment']:.3f} over "
+        f"{r['samples']} samples (1.0 by construction of the layout); all ten stages present in "
+        f"{100 * res['stages_complete']:.0f}% of samples; mean branches per stage, samples {b['samples']} against "
+        f"data {b['data']}.",
+        "- **Limits**: a small model trained briefly on a CPU: its trees are rougher than the procedural ones; retrain "
+        "with more steps for better shapes.", ""])
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #c10a0008
+def completion_check(partial: Tree, completions, tok: Tokenizer, order: str = "dfs") -> dict:
+    "Whether all `completions` of `partial` keep its branches exactly and whether they differ pairwise."
+    ref, k = partial.take(tok.order(partial, order, normalize=False)), partial.n
+    kept = all(np.array_equal(t.start[:k], ref.start) and np.array_equal(t.end[:k], ref.end)
+               and np.array_equal(t.parent[:k], ref.parent) for t in completions)
+    same = lambda a, b: a.n == b.n and np.array_equal(a.end, b.end)
+    distinct = all(not same(a, b) for i, a in enumerate(completions) for b in completions[:i])
+    return {"prompt_kept_exactly": bool(kept), "pairwise_distinct": bool(distinct)}
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #5b1d55c0
 def demo_growth(out_dir, seed: int = 0) -> list:

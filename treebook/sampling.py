@@ -24,20 +24,22 @@ def pick(logits, allowed=None, temperature: float = 1.0, top_k: int | None = Non
     if allowed is not None: logits = logits.masked_fill(~allowed, float("-inf"))
     if temperature == 0: return logits.argmax(-1)
     logits = logits / temperature
-    if top_k: logits = logits.masked_fill(logits < logits.topk(min(top_k, logits.shape[-1]), -1).values[:, -1:], float("-inf"))
+    if top_k:
+        kth = logits.topk(min(top_k, logits.shape[-1]), -1).values[:, -1:]
+        logits = logits.masked_fill(logits < kth, float("-inf"))
     if top_p is not None and top_p < 1:
         srt, order = logits.sort(-1, descending=True)
         probs = srt.softmax(-1)
         srt = srt.masked_fill(probs.cumsum(-1) - probs > top_p, float("-inf"))  # the most likely token always stays
         logits = torch.full_like(logits, float("-inf")).scatter(-1, order, srt)
-    cum = logits.softmax(-1).cumsum(-1)                 # inverse-CDF draw: one uniform per row, far cheaper than multinomial
-    u = (1 - torch.rand(len(cum), 1, generator=generator)) * cum[:, -1:]         # in (0, total]: never a zero-probability token
+    cum = logits.softmax(-1).cumsum(-1)         # inverse-CDF draw: one uniform per row, far cheaper than multinomial
+    u = (1 - torch.rand(len(cum), 1, generator=generator)) * cum[:, -1:]   # in (0, total]: no zero-probability token
     return (cum < u).sum(-1).clamp_(max=cum.shape[-1] - 1)
 
 # %% ../nbs/04a_sampling.ipynb #0bab7a15
 def pick_block(logits, allowed, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
                generator: torch.Generator | None = None, n_values: int = 256):
-    "`pick` at a group start: a value token vs a special one ([EOS], [STAGE]) at the model's own odds, then the token itself."
+    "`pick` at a group start: a value token or a special one ([EOS], [STAGE]) at the model's own odds, then the token."
     allowed = torch.as_tensor(allowed, dtype=torch.bool)
     probs = logits.masked_fill(~allowed, float("-inf")).softmax(-1)
     special = torch.zeros_like(allowed); special[:, n_values:] = True
@@ -77,8 +79,9 @@ class TreeGrammar:
                 if (self.cur[i, :s] >= tk.n_values).any(): continue  # a sequence that has ended
                 node = ends
                 for v in self.cur[i, :s]: node = node.get(int(v), {})
-                if not node: raise TreebookError(f"sequence {i}: branch {b} starts at {self.cur[i, :s].tolist()}, which is "
-                                                 "no earlier branch's end; fix the prompt or sample with structure=False")
+                if not node:
+                    raise TreebookError(f"sequence {i}: branch {b} starts at {self.cur[i, :s].tolist()}, which is no "
+                                        "earlier branch's end; fix the prompt or sample with structure=False")
                 ok[i, list(node)] = True
             if s == 0 and b > 0: ok[:, tk.eos] = True
         elif s in (3, 7): ok[:, tk.min_radius_token:tk.n_values] = True
@@ -101,7 +104,7 @@ class TreeGrammar:
 
 # %% ../nbs/04a_sampling.ipynb #4d26ca6f
 def token_connectivity(seq, tok) -> float:
-    "Fraction of the branches in token sequence `seq` that start at the root cell (branch 0) or at an earlier branch's end."
+    "Share of the branches in token sequence `seq` that start at the root cell (branch 0) or at an earlier end."
     seq = np.asarray(seq)
     vals = seq[8:8 + 8 * ((len(seq) - 8) // 8)].reshape(-1, 8)
     vals = vals[(vals < tok.n_values).all(1)]
