@@ -169,7 +169,7 @@ image_grid(pics, ncols=4, labels=labels).save(root / "results" / f"{name}.png")
 (root / "results" / f"{name}.json").write_text(json.dumps(res, indent=1))
 tp = root / "results" / "conditions.json"
 table = json.loads(tp.read_text()) if tp.exists() else {"table": {}}
-table["table"][f"{a.kind}/{a.order}{'+glimpse' if a.glimpse else ''}{'+' + a.tag if a.tag else ''}{variant}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": f"results/{name}.json"}
+table["table"][f"{a.kind}/{a.order}{'+glimpse' if a.glimpse else ''}{'+' + a.tag if a.tag else ''}{variant}"] = {"step": ck["step"], "held_out_loss": res["held_out_loss"], **res["eval"], "details": {"record": f"results/{name}.json", **{k: v for k, v in res.items() if k != "eval"}}}
 tp.write_text(json.dumps(table, indent=1))
 print(json.dumps(res, indent=1))
 if a.ship:
