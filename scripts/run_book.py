@@ -1,8 +1,7 @@
-"""Run chapters the way `nbdev_test` does (cells flagged `slow` skipped) and keep their outputs in the notebooks,
-so that a reader sees the figures and the `show_doc` tables without running anything.
-
-Usage: python scripts/run_book.py nbs/00_tree.ipynb ... (`make book`); then `nbdev_clean`. Pictures are kept small:
-a PNG over 50 kB is stored with 256 colours and halved until it fits; stderr (progress bars, warnings) is dropped.
+"""Run chapters as `nbdev_test` does (`slow` cells skipped), keeping their outputs (figures, `show_doc`) in the notebooks.
+Usage: python scripts/run_book.py [--slow] nbs/00_tree.ipynb ... (`make book`), then `nbdev_clean`. `--slow` runs
+the cells flagged `slow` too (05_train's pictures of the shipped model). A PNG over 50 kB is stored with 256 colours
+and halved until it fits; stderr (progress bars, warnings) and JPEG twins of pictures are dropped.
 """
 import base64, io, os, sys
 from pathlib import Path
@@ -14,14 +13,12 @@ from nbdev.config import get_config
 from nbdev.process import NBProcessor
 from PIL import Image
 
-MAX_PNG = 50_000
-NOISE = ("[Open3D", "Jupyter environment detected")
+MAX_PNG, NOISE = 50_000, ("[Open3D", "Jupyter environment detected")
 
 
 def small_png(b64: str) -> str:
     "The picture `b64` (base64 PNG) re-encoded to at most `MAX_PNG` bytes."
-    data = base64.b64decode(b64)
-    img = Image.open(io.BytesIO(data))
+    data = base64.b64decode(b64); img = Image.open(io.BytesIO(data))
     while len(data) > MAX_PNG:
         img = img.convert("RGB").quantize(256) if img.mode != "P" else img.resize((img.width // 2, img.height // 2))
         buf = io.BytesIO(); img.save(buf, "PNG", optimize=True); data = buf.getvalue()
@@ -33,15 +30,11 @@ def tidy(outputs: list) -> list:
     out = []
     for o in outputs:
         if o.get("output_type") == "stream":
-            if o.get("name") == "stderr": continue
-            text = "".join(l for l in "".join(o["text"]).splitlines(True) if not l.startswith(NOISE))
-            if not text.strip(): continue
-            o["text"] = text
+            o["text"] = "".join(l for l in "".join(o["text"]).splitlines(True) if not l.startswith(NOISE))
+            if o.get("name") == "stderr" or not o["text"].strip(): continue
         data = o.get("data", {})
         data.pop("application/vnd.jupyter.widget-view+json", None)
-        if "image/png" in data:
-            data.pop("image/jpeg", None)
-            data["image/png"] = small_png("".join(data["image/png"]))
+        if "image/png" in data: data.pop("image/jpeg", None); data["image/png"] = small_png("".join(data["image/png"]))
         out.append(o)
     return out
 
@@ -54,13 +47,14 @@ def run(fn: Path, skip=("slow",)):
         d = getattr(cell, "directives_", {}) or {}
         return cell.cell_type != "code" or d.get("eval:", [""])[0].lower() == "false" or bool(set(skip) & d.keys())
     with working_directory(fn.parent): CaptureShell(fn, mpl_format="png").run_all(nb, exc_stop=True, preproc=no_eval)
-    raw = read_nb(fn)
-    ran = {c.get("id"): c for c in nb.cells}
+    raw, ran = read_nb(fn), {c.get("id"): c for c in nb.cells}
     for c in raw.cells:
         if c.cell_type == "code" and c.get("id") in ran: c.outputs = tidy(ran[c.id].get("outputs", []))
     write_nb(raw, fn)
 
 
 if __name__ == "__main__":
-    get_config()
-    for a in sys.argv[1:]: run(Path(a).resolve()); print(f"ran {a}: {Path(a).stat().st_size / 1e3:.0f} kB")
+    get_config(); args = sys.argv[1:]
+    for a in [a for a in args if a != "--slow"]:
+        run(Path(a).resolve(), () if "--slow" in args else ("slow",))
+        print(f"ran {a}: {Path(a).stat().st_size / 1e3:.0f} kB")
