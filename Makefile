@@ -36,7 +36,8 @@ readme: install
 	$(PY) scripts/make_readme.py
 
 # Run chapters as nbdev_test does and keep their outputs (figures, show_doc tables) in the notebooks, so that a reader
-# sees them without running anything: `make book` (every chapter) or `make book NBS="nbs/00_tree.ipynb ..."`; `--slow` among them runs the slow cells too.
+# sees them without running anything: `make book` (every chapter) or `make book NBS="nbs/00_tree.ipynb ..."`
+# (`NBS="--slow nbs/05_train.ipynb"` runs the cells flagged slow too).
 NBS ?= $(wildcard nbs/*.ipynb)
 book: install
 	$(PY) scripts/run_book.py $(NBS)
