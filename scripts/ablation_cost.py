@@ -1,18 +1,15 @@
-"""Table 2's cost columns, measured fairly on a shared machine: time of one training step (forward + backward + AdamW)
-and peak memory for each architecture, at the ablation's size and at the shipped model's size.
-
-Usage: python scripts/ablation_cost.py [--repeats 3] [--threads 1]
-Timing is round-robin over the architectures (each repeat times every one once), so that load from other jobs falls on
-all of them alike; the median is reported. Memory: each architecture in a fresh process, peak resident set (VmHWM, reset just before) during two
-steps minus the resident set before the first. Writes results/ablation_cost.json (command, commit, machine).
-"""
-import argparse, json, os, platform, subprocess, sys, time
+"""Table 2's cost columns on a shared machine: time of one training step (forward + backward + AdamW) and peak memory
+of each architecture, at the ablation's size and at the shipped model's. Usage: python scripts/ablation_cost.py
+[--repeats 3] [--threads 1]. Timing is round-robin over the architectures (each repeat times every one once), so that
+load from other jobs falls on all alike; the median is reported. Memory: each architecture in a fresh process, peak
+resident set (VmHWM, reset just before) during two steps minus the resident set before the first.
+Writes results/ablation_cost.json (command, commit, machine)."""
+import argparse, json, os, subprocess, sys, time
 from pathlib import Path
 import provenance   # scripts/provenance.py, beside this script
 import numpy as np, torch
 from treebook.hourglass import ARCHS, ModelConfig, TreeTransformer
 
-root = Path(__file__).resolve().parent.parent
 SIZES = {"ablation (L=400, dim 64, depth 6, batch 8)": dict(L=400, dim=64, depth=6, heads=4, batch=8),
          "shipped (L=1616, dim 128, depth 8, batch 4)": dict(L=1616, dim=128, depth=8, heads=4, batch=4)}
 
@@ -38,12 +35,7 @@ def main():
     p.add_argument("--_mem", nargs=2, default=None, help=argparse.SUPPRESS)
     a = p.parse_args(); torch.set_num_threads(a.threads)
     if a._mem: return memory(*a._mem)
-    out = {"command": "python scripts/ablation_cost.py " + " ".join(sys.argv[1:]),
-           "commit": provenance.commit(),
-           "time": time.strftime("%Y-%m-%d %H:%M:%S"),
-           "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads": a.threads, "load_average": os.getloadavg(),
-                       "note": "2 CPU cores shared with other jobs; round-robin timing spreads their load over all architectures"},
-           "sizes": {}}
+    out, load = {"sizes": {}}, os.getloadavg()
     for size, s in SIZES.items():
         models = {arch: make(arch, s) for arch in ARCHS}
         for arch in ARCHS: step(*models[arch])  # warm-up
@@ -60,7 +52,8 @@ def main():
         for arch in ARCHS: rows[arch]["time_vs_pt"] = rows[arch]["step_s_median"] / pt["step_s_median"]; rows[arch]["memory_vs_pt"] = rows[arch]["peak_mb"] / pt["peak_mb"]
         out["sizes"][size] = rows
         print(size, json.dumps({k: (round(v["step_s_median"], 3), round(v["peak_mb"])) for k, v in rows.items()}), flush=True)
-    (root / "results" / "ablation_cost.json").write_text(json.dumps(out, indent=1))
+    provenance.record("scripts/ablation_cost.py", out, "results/ablation_cost.json", threads=a.threads, load_average=load,
+                      note="2 CPU cores shared with other jobs; round-robin timing spreads their load over all architectures")
 
 if __name__ == "__main__":
     main()
