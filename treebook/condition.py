@@ -23,12 +23,15 @@ from .hourglass import ModelConfig, TreeTransformer
 from .growth import condition_prefix, extend_context, fit, generate, wrap_embed
 
 # %% auto #0
-__all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'QueryPrompt', 'SetEncoder',
-           'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target', 'points_input',
-           'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_volumes', 'glimpsing', 'condition_of',
-           'cond_batch', 'input_reliance', 'save_conditional', 'load_conditional', 'sample_conditional',
+__all__ = ['N_QUERIES', 'KINDS', 'IMAGE_INPUT', 'N_POINTS', 'MAX_LINES', 'COND_VERSION', 'FIT_SETTINGS', 'QueryPrompt',
+           'SetEncoder', 'ImageEncoder', 'image_input', 'silhouette_target', 'sketch_input', 'sketch_target',
+           'points_input', 'read_lines', 'ConditionalTree', 'Glimpse', 'stroke_images', 'point_volumes', 'glimpsing',
+           'condition_of', 'cond_batch', 'input_reliance', 'save_conditional', 'load_conditional', 'sample_conditional',
            'image_to_tree', 'sketch_to_tree', 'points_to_tree', 'silhouette_scores', 'evaluate_image',
-           'evaluate_points', 'fit_silhouette', 'best_by_silhouette', 'demo_image_to_tree']
+           'evaluate_points', 'fit_silhouette', 'best_by_silhouette', 'conditional_model', 'BatchesAhead',
+           'train_conditional', 'load_run', 'held_out_loss', 'evaluate_sketch', 'evaluate_conditional',
+           'conditional_figure', 'conditions_row', 'conditional_card', 'condition_usage', 'unconditional_silhouettes',
+           'branch_bend', 'fit_settings', 'silhouette_ceiling', 'demo_image_to_tree']
 
 # %% ../nbs/10a_condition.ipynb #d9e475f4
 N_QUERIES = 50
@@ -597,6 +600,260 @@ def best_by_silhouette(trees, target, fit: bool = True, max_px: float = 40) -> t
         if not len(trees): raise TreebookError("no trees to choose from")
         return trees[0], silhouette_scores(np.zeros_like(m), m)
     return best
+
+# %% ../nbs/10a_condition.ipynb #3c48637f
+def conditional_model(kind: str, train, test=(), init=None, source=None, glimpse: bool = False,
+                      broadcast: bool = True, dim: int = 64, depth: int = 5, heads: int = 4, seed: int = 0) -> tuple:
+    """(ConditionalTree, Tokenizer) to train on `train`, with room for the longest tree of `train` and `test`. The
+    decoder comes from the conditional model `source` (with its encoder, prompt, summary and `broadcast`; a glimpse it
+    lacks starts at zero), else from the unconditional model `init`, else new (`dim`, `depth`, `heads`)."""
+    max_len = -(-N_QUERIES // 8) * 8 + max(t.n for t in list(train) + list(test)) * 8 + 16
+    if source is not None:
+        src, tok = load_conditional(source)
+        if src.kind != kind: raise TreebookError(f"{source} is a {src.kind} model, not {kind}")
+        dec, broadcast = extend_context(src.decoder, max_len), src.broadcast
+    elif init is not None:
+        from treebook.train import load_pretrained
+        dec, tok = load_pretrained(init)
+        dec = extend_context(dec, max_len)
+    else:
+        tok = Tokenizer.fit(list(train)[:2000])
+        torch.manual_seed(seed)
+        dec = TreeTransformer(ModelConfig(arch="full", dim=dim, depth=depth, heads=heads, max_len=max_len))
+    torch.manual_seed(seed + 1)
+    model = ConditionalTree(kind, dec, heads=dec.config.heads, broadcast=broadcast, glimpse=glimpse, tok=tok)
+    if source is not None:
+        own = {k: v for k, v in src.state_dict().items() if not k.startswith("decoder.")}
+        missing, unexpected = model.load_state_dict(own, strict=False)
+        if unexpected or any(not k.startswith(("decoder.", "glimpse.")) for k in missing):
+            raise TreebookError(f"{source} does not fit this model (missing "
+                                f"{[k for k in missing if not k.startswith('decoder.')]}, unexpected {unexpected})")
+    return model, tok
+
+# %% ../nbs/10a_condition.ipynb #9e3dfd3c
+_AHEAD = {}
+
+def _ahead(k): return _AHEAD["make"](k)
+
+class BatchesAhead:
+    "`make_batch(k)` for the steps k in turn, made by `workers` forked processes `depth` steps ahead of the one asked."
+    def __init__(self, make_batch, workers: int, depth: int):
+        import multiprocessing as mp
+        _AHEAD["make"] = make_batch   # the forked workers inherit it: the training trees are not sent to them
+        self.pool = mp.get_context("fork").Pool(workers, initializer=torch.set_num_threads, initargs=(1,))
+        self.depth, self.pending = depth, {}
+
+    def __call__(self, k):
+        for j in range(k, k + self.depth):
+            if j not in self.pending: self.pending[j] = self.pool.apply_async(_ahead, (j,))
+        for j in [j for j in self.pending if j < k]: del self.pending[j]
+        return self.pending.pop(k).get()
+
+# %% ../nbs/10a_condition.ipynb #6a445a93
+def train_conditional(model: ConditionalTree, make_batch, out, steps: int = 300, lr: float = 1e-3, warmup: int = 20,
+                      device: str = "cpu", workers: int = 0, time_limit: float | None = None,
+                      meta: dict | None = None) -> dict:
+    ("Train `model` on the batches `make_batch(k)` with `growth.fit` (checkpoints in `out`, resumable) on `device`; "
+     "with `workers` the batches are made ahead (`BatchesAhead`). Returns `fit`'s summary; the model ends on the CPU.")
+    batches = BatchesAhead(make_batch, workers, 4 * workers) if workers else make_batch   # forked before the GPU
+    gpu = device != "cpu"
+    if gpu: torch.backends.cuda.matmul.allow_tf32 = torch.backends.cudnn.allow_tf32 = True
+    r = fit(model.to(device), batches, lambda m, b: m.loss(b), out, steps=steps, lr=lr, warmup=warmup,
+            ckpt_every=200 if gpu else 5, log_every=25 if gpu else 5, time_limit=time_limit, meta=meta)
+    model.cpu()
+    return r
+
+# %% ../nbs/10a_condition.ipynb #8618383d
+def load_run(model: ConditionalTree, tok: Tokenizer, out) -> tuple:
+    ("(model, checkpoint): the weights of the run in `out` (its last.pt) loaded into `model`, in eval mode; a run "
+     "from before the broadcast summary gets a model without one.")
+    ck = torch.load(Path(out) / "last.pt", map_location="cpu", weights_only=True)
+    if model.broadcast and "summary.weight" not in ck["model"]:
+        model = ConditionalTree(model.kind, model.decoder, heads=model.decoder.config.heads, broadcast=False,
+                                glimpse=model.glimpse is not None, tok=tok)
+    model.load_state_dict(ck["model"])
+    return model.eval(), ck
+
+# %% ../nbs/10a_condition.ipynb #8841c47e
+@torch.no_grad()
+def held_out_loss(model: ConditionalTree, tok: Tokenizer, trees, order: str = "dfs", seed: int = 7,
+                  batches: int = 4) -> float:
+    "Mean loss of `batches` batches of 8 of the held-out `trees` (drawn by `seed`, not augmented)."
+    return float(np.mean([float(model.loss(cond_batch(model.kind, trees, tok, k, 8, seed, order, False)))
+                          for k in range(batches)]))
+
+# %% ../nbs/10a_condition.ipynb #8eb31e1f
+def evaluate_sketch(model, trees, seed: int = 0, progress: bool = True, fit: bool = False, candidates: int = 1,
+                    **kw) -> dict:
+    ("Mean silhouette IoU / precision / recall / F1 of sketch-to-tree on held-out canonical `trees`, against the "
+     "silhouette of each tree (`fit` to the strokes, `candidates`: see `sketch_to_tree`).")
+    from treebook.scan import sketch, silhouette
+    rows = []
+    for i, t in enumerate(tqdm(trees, desc="sketch to tree", disable=not progress)):
+        g = sketch_to_tree(sketch(t)[0], 1, seed + i, model, fit=fit, candidates=candidates, **kw)[0]
+        rows.append(silhouette_scores(silhouette(g) if g.n else np.zeros((224, 224)), silhouette(t)))
+    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
+
+# %% ../nbs/10a_condition.ipynb #4579a6b4
+def evaluate_conditional(model, trees, seed: int = 0, fit: bool = False, candidates: int = 1, baseline=None) -> dict:
+    ("The evaluation of a (ConditionalTree, Tokenizer) `model` of its kind: `evaluate_image`, `evaluate_sketch` or "
+     "`evaluate_points` (with the unconditional `baseline`, a name or (net, tok)).")
+    kind = model[0].kind
+    if kind == "image": return evaluate_image(model, trees, seed=seed, fit=fit, candidates=candidates)
+    if kind == "sketch": return evaluate_sketch(model, trees, seed=seed, fit=fit, candidates=candidates)
+    if baseline is not None and not isinstance(baseline, (tuple, list)):
+        from treebook.train import load_pretrained
+        baseline = load_pretrained(baseline)
+    return evaluate_points(model, trees, baseline=baseline, seed=seed)
+
+# %% ../nbs/10a_condition.ipynb #4b4a5326
+def conditional_figure(model, trees, seed: int = 0, fit: bool = False, candidates: int = 1):
+    ("A picture (PIL) of each of `trees` as the model's input (silhouette, strokes, or points drawn from the front) "
+     "beside the silhouette of the tree generated from it by the same camera.")
+    from PIL import Image, ImageDraw
+    from treebook.scan import silhouette, sketch, _to_px
+    from treebook.render import image_grid
+    from treebook.metrics import sample_surface
+    kind, pics, labels = model[0].kind, [], []
+    for i, t in enumerate(trees):
+        if kind == "image":
+            inp = Image.fromarray(255 - silhouette(t))
+            g = image_to_tree(silhouette(t), 1, seed + i, model, fit=fit, candidates=candidates)[0]
+        elif kind == "sketch":
+            inp = Image.fromarray(255 - sketch(t)[1])
+            g = sketch_to_tree(sketch(t)[0], 1, seed + i, model, fit=fit, candidates=candidates)[0]
+        else:
+            pts = sample_surface(t, 4 * N_POINTS, seed + i)
+            inp = Image.new("L", (224, 224), 255); dr = ImageDraw.Draw(inp)
+            for x, y in _to_px(points_input(pts, seed + i)[1][:, [0, 2]], 224):
+                dr.ellipse([x - 1, y - 1, x + 1, y + 1], fill=0)
+            g = points_to_tree(pts, 1, seed + i, model)[0]
+        pics += [inp, Image.fromarray(255 - silhouette(g)) if g.n else Image.new("L", (224, 224), 255)]
+        labels += [f"held-out {i}: input", f"generated ({g.n} branches)"]
+    return image_grid(pics, ncols=4, labels=labels)
+
+# %% ../nbs/10a_condition.ipynb #8035deeb
+def conditions_row(path, key: str, scores: dict, record: dict, name: str) -> dict:
+    ("Add or replace row `key` of the results table at `path` (`results/conditions.json`): `scores`, then under "
+     "'details' the record's path `name` and the record less its 'eval'. Returns the table.")
+    path = Path(path)
+    table = json.loads(path.read_text()) if path.exists() else {"table": {}}
+    table["table"][key] = {**scores, "details": {"record": name, **{k: v for k, v in record.items() if k != "eval"}}}
+    _atomic_write(path, lambda f: f.write(json.dumps(table, indent=1).encode()))
+    return table
+
+# %% ../nbs/10a_condition.ipynb #2c52d517
+def conditional_card(model: ConditionalTree, res: dict, name: str, trees: int, order: str = "dfs", init=None,
+                     source=None, lr: float = 1e-3, warmup: int = 20, batch: int = 8, steps: int = 300,
+                     threads: int = 1, n_eval: int = 50, device: str | None = None) -> str:
+    ("The model card (markdown) of a shipped conditional model from its record `res` (written to `results/{name}"
+     ".json`): data, model, training, command, metrics, limits; the arguments are the run's, `device` where it trained "
+     "(None: on `threads` CPU threads).")
+    k, c, run = model.kind, model.decoder.config, res["run"]
+    data = {"image": "photographed by `scan.silhouette` (front camera, 224 px, read at 112 px)",
+            "sketch": "sketched by `scan.sketch` (2D segments)",
+            "points": "sampled (200 points of the branch surfaces)"}[k]
+    enc = "small CNN from scratch" if k == "image" else "per-element MLP + one self-attention layer"
+    over = {"image": "silhouette", "sketch": "strokes drawn by the front camera",
+            "points": "points counted into a 32^3 voxel grid, in 3D"}[k]
+    glimpse = ("" if model.glimpse is None else f"; the glimpse (a second small CNN over the {over}, "
+               "sampled where each token draws, `condition.Glimpse`)")
+    commit = res.get("train_commit", res["commit"])
+    start = (f"started from the conditional model `{source}` as it was at commit {commit[:7]}" if source else
+             f"decoder started from `{init}`" if init else "decoder trained from scratch")
+    device = device or f"{threads} thread(s) of a 2-core CPU"
+    shipped = (f"; evaluated and shipped by `{res['command']}` (commit {res['commit'][:7]})"
+               if "train_command" in res else "")
+    ev = ", ".join(f"{m} {v:.4g}" for m, v in res["eval"].items() if isinstance(v, float))
+    return f"""# elm-{k}: {k} to tree
+
+- **Data**: the first {trees} training trees of the `elm` dataset (`data/elm`), turned about z and mirrored, then \
+{data}; sequences in {order.upper()} order.
+- **Model**: {k} encoder ({enc}), {N_QUERIES} learnable queries with cross-attention (a 56-vector prefix)\
+{' and a pooled summary added to every token' if model.broadcast else ''}{glimpse}, hourglass decoder arch `{c.arch}`, \
+dim {c.dim}, depth {c.depth}, heads {c.heads}; {run['n_params']:,} parameters; {start}.
+- **Training**: AdamW, peak lr {lr}, {warmup} warm-up steps then cosine, batch {batch}; {run['step']} of \
+{run['steps_planned'] or steps} planned steps in {run['seconds'] / 60:.1f} minutes on {device}.
+- **Command**: `{res.get('train_command', res['command'])}` (commit {commit[:7]}){shipped}.
+- **Metrics** on {n_eval} held-out trees (`results/{name}.json`): held-out loss {res['held_out_loss']:.3f}; {ev}.
+- **Limits**: a small model, trained for minutes on procedural elms of one species only; inputs unlike them \
+(photographs, other species, other cameras) are outside what it has seen.
+"""
+
+# %% ../nbs/10a_condition.ipynb #7889a88d
+def condition_usage(models, trees, batches: int = 4, seed: int = 7) -> dict:
+    ("Does each of `models` (names, paths or pairs) read its condition? Per model the held-out loss of `batches` "
+     "batches of 8 of `trees` with each tree's own condition (matched) and another's (shuffled), by `input_reliance`.")
+    rows = {}
+    for name in models:
+        model, tok = load_conditional(name)
+        r = [input_reliance(model, cond_batch(model.kind, trees, tok, k, 8, seed, "dfs", False))
+             for k in range(batches)]
+        matched, shuffled = [x["own"] for x in r], [x["other"] for x in r]
+        rows[str(name)] = {"kind": model.kind, "matched": float(np.mean(matched)), "shuffled": float(np.mean(shuffled)),
+                           "gain_nats_per_token": float(np.mean(shuffled) - np.mean(matched))}
+    return rows
+
+# %% ../nbs/10a_condition.ipynb #ff0adbd3
+def unconditional_silhouettes(model, trees, seed: int = 0, fit: bool = False, candidates: int = 1) -> dict:
+    ("The baseline of image and sketch to tree: mean silhouette scores of `candidates` *unconditional* samples of "
+     "`model` (name or (net, tok); sample i uses seed + i, as `evaluate_image`) against each of `trees`' silhouettes, "
+     "the best of them kept, each fitted first if `fit`: the steps `image_to_tree` takes after the image model.")
+    from treebook.scan import silhouette
+    from treebook.train import load_pretrained
+    _check_candidates(candidates)
+    net, tok = load_pretrained(model) if not isinstance(model, (tuple, list)) else model
+    rows = []
+    for i, t in enumerate(trees):
+        gs = [tok.decode(s) for s in generate(net, candidates, tok=tok, temperature=0.9, top_p=0.95, seed=seed + i)]
+        rows.append(best_by_silhouette(gs, silhouette(t), fit=fit)[1])
+    return {k: float(np.mean([r[k] for r in rows])) for k in rows[0]} | {"n": len(rows)}
+
+# %% ../nbs/10a_condition.ipynb #135bff1c
+def branch_bend(t: Tree) -> float:
+    "Mean angle (degrees) between each child branch and its parent, as the front camera sees them."
+    d = (t.end - t.start)[:, [0, 2]]; ch = np.flatnonzero(t.parent >= 0)
+    u, v = d[ch], d[t.parent[ch]]
+    c = (u * v).sum(1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-12)
+    return float(np.degrees(np.arccos(np.clip(c, -1, 1))).mean())
+
+# %% ../nbs/10a_condition.ipynb #84eb2560
+FIT_SETTINGS = {"as grown": None, "straight to the nearest pixel": dict(steps=0, snap_px=40),
+                "8 steps, snap 4 px": dict(steps=8), "16 steps, no snap": dict(snap_px=0),
+                "16 steps, snap 4 px (default)": {}}
+
+def fit_settings(trees, n: int = 40, seed: int = 0, settings: dict = FIT_SETTINGS) -> dict:
+    ("How `fit_silhouette` was set: for each of `settings` (keyword arguments; None: not fitted) the mean IoU and "
+     "`branch_bend` of `n` of `trees` fitted to the silhouettes of `n` others, both drawn by `seed`.")
+    from treebook.scan import silhouette
+    rng = np.random.default_rng(seed)
+    targets, sources = rng.choice(len(trees), n, replace=False), rng.choice(len(trees), n, replace=False)
+    rows = {}
+    for name, kw in tqdm(settings.items(), desc="settings"):
+        iou, b = [], []
+        for ti, si in zip(targets, sources):
+            target = silhouette(trees[ti])
+            g = trees[si] if kw is None else fit_silhouette(trees[si], target, **kw)
+            iou.append(silhouette_scores(silhouette(g), target)["iou"]); b.append(branch_bend(g))
+        rows[name] = {"iou": float(np.mean(iou)), "bend_degrees": float(np.mean(b)), "kwargs": kw}
+    return rows
+
+# %% ../nbs/10a_condition.ipynb #b1bf6d90
+def silhouette_ceiling(train, test, pool: int = 3000, seed: int = 0, ks=(1, 4, 16, 64)) -> dict:
+    ("How high silhouette IoU can go for a model that draws real trees but does not place each twig: for each of "
+     "`test`, the IoU of the best of `pool` of `train` (drawn by `seed`), chosen with the silhouette in hand (an "
+     "oracle no model has), and of the best of k random ones for each k of `ks`.")
+    from treebook.scan import silhouette
+    idx = np.random.default_rng(seed).choice(len(train), min(pool, len(train)), replace=False)
+    S = np.stack([silhouette(train[i]) > 0 for i in tqdm(idx, desc="training silhouettes")])
+    S = S.reshape(len(idx), -1).astype(np.float32)
+    T = np.stack([silhouette(t) > 0 for t in test]).reshape(len(test), -1).astype(np.float32)
+    inter = T @ S.T
+    iou = inter / (T.sum(1)[:, None] + S.sum(1)[None] - inter)
+    best = lambda k: float(np.mean([iou[:, j * k:(j + 1) * k].max(1).mean() for j in range(len(idx) // k)]))
+    return {"n_eval": len(test), "pool": len(idx), "iou_random_pair": float(iou.mean()),
+            "iou_best_of_pool": float(iou.max(1).mean()),
+            "iou_best_of_k_random": {k: best(k) for k in ks if k <= len(idx)}}
 
 # %% ../nbs/10a_condition.ipynb #60eedd5e
 def demo_image_to_tree(out_dir, seed: int = 0, model="elm-image", candidates: int = 4) -> list:
