@@ -1,10 +1,10 @@
-"scripts/check_trees.py refuses bad flags before any work."
+"benchmarks/check_trees.py refuses bad flags before any work."
 import json, subprocess, sys
 from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "check_trees.py"
+SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "check_trees.py"
 
 
 @pytest.mark.parametrize("args, says", [(["--trees-per-species", "0"], ">= 1"), (["--first-seed", "7100"], ">= 7300")])

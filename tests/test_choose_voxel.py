@@ -1,10 +1,10 @@
-"scripts/choose_voxel.py refuses bad flags before any work."
+"benchmarks/choose_voxel.py refuses bad flags before any work."
 import subprocess, sys
 from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "choose_voxel.py"
+SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "choose_voxel.py"
 
 
 @pytest.mark.parametrize("args, says", [(["--fractions", "a,b"], "numbers"), (["--fractions", "0.2"], "[0, 0.05)"),

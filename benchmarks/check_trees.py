@@ -1,6 +1,6 @@
 """How often `treebook.reconstruct.find_trees` sees two trees where there is one, and one where there are two.
 
-Usage: python scripts/check_trees.py [--trees-per-species 3] [--first-seed 7300] [--out results/reconstruct_trees.json]
+Usage: python benchmarks/check_trees.py [--trees-per-species 3] [--first-seed 7300] [--out results/reconstruct_trees.json]
 
 Its thresholds were set by hand on the trees of seeds 7100-7103 and 7200-7202. This measures them on other trees (seeds
 --first-seed onwards, every species), each scanned four ways (clean, noisy, incomplete, leafy; 16,384 points):
@@ -92,7 +92,7 @@ def main():
                    pairs_found_apart_over_0_6=f"{sum(r['trees'] == 2 for r in pairs if r['apart'] > 0.6)} of {sum(r['apart'] > 0.6 for r in pairs)}",
                    points_right_when_found=round(float(np.mean([r["points_right"] for r in found])), 4) if found else None,
                    real_scans_one_tree=f"{sum(r['trees'] == 1 for r in real)} of {len(real)}")
-    res = dict(command="python scripts/check_trees.py " + " ".join(sys.argv[1:]), commit=provenance.commit(short=True),
+    res = dict(command="python benchmarks/check_trees.py " + " ".join(sys.argv[1:]), commit=provenance.commit(short=True),
                machine=f"{platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}", minutes=round((time.perf_counter() - t0) / 60, 1),
                summary=summary, real_scans=real, rows=rows)
     _atomic_write(Path(a.out), lambda fh: fh.write(json.dumps(res, indent=1).encode()))

@@ -1,6 +1,6 @@
 """Choose the finest voxel of `prepare_points` (treebook.reconstruct.VOXEL) on procedural scans of several densities.
 
-Usage: python scripts/choose_voxel.py [--fractions 0,0.002,0.0025,0.003,0.004,0.005] [--trees-per-species 2] [--out results/reconstruct_voxel.json]
+Usage: python benchmarks/choose_voxel.py [--fractions 0,0.002,0.0025,0.003,0.004,0.005] [--trees-per-species 2] [--out results/reconstruct_voxel.json]
 
 Each tree (seeds 7100 onwards: not the benchmark's trees) is scanned four ways: 16,384 points, 4,096 points (sparse),
 49,152 points (dense, still under `prepare_points`'s 60,000: above it a cloud is thinned to 60,000 anyway), and the 16,384-point scan three times over, two of the copies jittered by 0.05% of the diagonal
@@ -66,7 +66,7 @@ def main():
             table[f"{f}/{kind}"] = {m: round(float(np.mean([x[m] for x in r])), 4) for m in ("chamfer", "hausdorff", "coverage")}
     mean = {str(f): round(float(np.mean([table[f"{f}/{k}"]["chamfer"] for k in KINDS])), 4) for f in fr}
     chosen = float(min(mean, key=mean.get))
-    res = dict(command="python scripts/choose_voxel.py " + " ".join(sys.argv[1:]), commit=provenance.commit(short=True),
+    res = dict(command="python benchmarks/choose_voxel.py " + " ".join(sys.argv[1:]), commit=provenance.commit(short=True),
                machine=f"{platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}", minutes=round((time.perf_counter() - t0) / 60, 1),
                trees=len(jobs), kinds=list(KINDS), fractions=fr, mean_chamfer=mean, chosen=chosen, table=table, rows=rows)
     _atomic_write(Path(a.out), lambda fh: fh.write(json.dumps(res, indent=1).encode()))
