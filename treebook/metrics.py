@@ -14,7 +14,8 @@ from .tree import Tree, TreebookError
 # %% auto #0
 __all__ = ['chamfer', 'POINTNET_VERSION', 'POINTNET_POINTS', 'sample_surface', 'normalize_cloud', 'tree_clouds', 'cloud_chamfer',
            'cd_estimates', 'nearest', 'jsd', 'evaluate', 'connect_rate', 'SpeciesPointNet', 'train_species_pointnet',
-           'save_species_pointnet', 'load_species_pointnet', 'pointnet_features', 'frechet_distance', 'fpd']
+           'save_species_pointnet', 'load_species_pointnet', 'pointnet_features', 'frechet_distance', 'fpd',
+           'sample_scores', 'quality_targets']
 
 # %% ../nbs/06_metrics.ipynb #aee8867e
 def sample_surface(tree: Tree, n: int = 2048, seed: int = 0) -> np.ndarray:
@@ -341,3 +342,24 @@ def fpd(gen, ref, net: SpeciesPointNet | None = None) -> float:
     "FPD (our stand-in for FID): Frechet distance of the species-PointNet features of clouds `gen` and `ref`."
     net = net or load_species_pointnet()
     return frechet_distance(pointnet_features(gen, net), pointnet_features(ref, net))
+
+# %% ../nbs/06_metrics.ipynb #2466cbe8
+def sample_scores(seqs, free, tok, ref, train=None, net: SpeciesPointNet | None = None) -> dict:
+    ("Connect of the token sequences `seqs` (sampled with structure-aware decoding) and `free` (without it), then "
+     "`evaluate` and `fpd` of the non-empty trees of `seqs` against the held-out clouds `ref` (`train`: training "
+     "clouds, for Novel). Returns 'Connect_structure', 'Connect_free', 'scores' and the decoded 'trees'.")
+    trees = [g for g in (tok.decode(s) for s in seqs) if g.n]
+    G = tree_clouds(trees, seed=1, progress=False)
+    scores = evaluate(G, ref, train=train)
+    scores["FPD"] = fpd(G, ref, net)
+    return {"Connect_structure": connect_rate(seqs, tok), "Connect_free": connect_rate(free, tok), "scores": scores,
+            "trees": trees}
+
+# %% ../nbs/06_metrics.ipynb #2077b442
+def quality_targets(res: dict) -> dict:
+    ("Which of the shipped model's quality figures a record `res` of `sample_scores` (with the training trees' scores "
+     "against the held-out ones under 'reference_train_vs_test') meets.")
+    s, r, cs, cf = res["scores"], res["reference_train_vs_test"], res["Connect_structure"], res["Connect_free"]
+    return {"Connect_structure == 1.0": cs["Connect"] == 1.0, "Connect_free >= 0.9": cf["Connect"] >= 0.9,
+            "Unique == 1.0": s["Unique"] == 1.0, "Novel == 1.0": s["Novel"] == 1.0, "1-NNA <= 0.75": s["1-NNA"] <= 0.75,
+            "COV-CD >= 0.40": s["COV-CD"] >= 0.40, "MMD-CD <= 1.5x train-vs-test": s["MMD-CD"] <= 1.5 * r["MMD-CD"]}

@@ -30,7 +30,7 @@ from .datasets import load_manifest, load_trees
 
 # %% auto #0
 __all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'sample_trees',
-           'demo_sample', 'main']
+           'demo_sample', 'elm_card', 'main']
 
 # %% ../nbs/05_train.ipynb #7ba35ceb
 def sequence_loss(model, seqs) -> tuple:
@@ -386,6 +386,52 @@ def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
     grid = image_grid(images, labels=[f"seed {seed}, #{i}" for i in range(n)])
     paths.append(_atomic_write(out_dir / "sampled_elm.png", lambda f: grid.save(f, format="png")))
     return paths
+
+# %% ../nbs/05_train.ipynb #3e60671c
+def elm_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100) -> str:
+    ("The model card (markdown) of the shipped elm from its evaluation record `res` (`results/elm_eval.json`): data, "
+     "model (`max_len` its context), training, command, scores; `batch` and `n_connect` as the evaluation sampled.")
+    run, ar, d, smp, s, r = res["run"], res["run"]["args"], res["data"], res["sampling"], res["scores"], \
+        res["reference_train_vs_test"]
+    stopped = ("" if run["last_step"] >= ar.get("steps", 0) else
+               f" of a {ar['steps']:,}-step schedule (stopped by --time-limit)")
+    epochs = run["last_step"] * ar["batch_size"] * ar["world"] / d["train"]
+    rows = "\n".join(f"| {k} | {s[k]:.4g} | {r.get(k, float('nan')):.4g} |"
+                     for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD"))
+    rows += f"\n| Novel | {s['Novel']:.4g} | - |"
+    cs, cf = res["Connect_structure"], res["Connect_free"]
+    return f"""# elm: a DFS / Full hourglass transformer for procedural elms
+
+- **Data**: `generate_dataset('elm', 10000, 'data/elm', max_branches=200, workers=2, seed=0)`: {d['train']} training \
+trees, {d['test']} held out (the dataset's own split); up to 200 branches, {res['branches_mean']:.0f} on average \
+in the samples.
+- **Model**: arch `{ar['arch']}`, order `{ar['order']}`, dim {ar['dim']}, depth {ar['depth']}, heads {ar['heads']}, \
+{run['n_params']:,} parameters, max_len {max_len}.
+- **Training**: AdamW (betas 0.9/0.95, weight decay {ar['weight_decay']}), peak lr {ar['lr']}, {ar['warmup']} warm-up \
+steps then cosine to a tenth, batch {ar['batch_size']} x {ar['world']} process(es), gradient clipping \
+{ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}; {run['last_step']} steps{stopped} \
+({epochs:.2f} epochs) in {(run['train_seconds'] or 0) / 60:.0f} minutes on 2 shared CPU cores. Shipped weights: step \
+{run['best_step']} (lowest validation loss on 128 held-out trees).
+- **Command**: `bash scripts/train_elm.sh` (resumable), which ends with `{res['command']}`.
+- **Commit** of the evaluation: {res['commit']}; full figures in `results/elm_eval.json`.
+
+## Scores on the held-out elms
+
+{smp['n']} trees sampled with temperature {smp['temperature']}, top-p {smp['top_p']}, structure-aware decoding, seeds \
+{smp['seed']}.. (batches of {batch}); clouds of 2,048 points in the radius-0.5 sphere. FPD is our stand-in for FID \
+(Frechet distance of species-PointNet features), not FID.
+
+| metric | samples vs held-out | training trees vs held-out (reference) |
+|---|---|---|
+{rows}
+
+- PPL on the held-out {d['test']}: {res['PPL']:.3f}
+- Connect with structure-aware decoding: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
+without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f})
+
+## Against the issue's quality figures
+
+""" + "\n".join(f"- {k}: {'met' if v else 'NOT met'}" for k, v in res["targets"].items()) + "\n"
 
 # %% ../nbs/05_train.ipynb #633825fb
 def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
