@@ -1,117 +1,60 @@
-"""HourglassTree Tables 1 and 2 at CPU scale: the same tiny model, the same steps, the same elm set, varying the branch
-order (zyx, Hilbert, DFS, BFS; arch Full) and the architecture (PT, HG1, HG2, HG2+R, Full; order DFS).
-
-Usage: python scripts/ablation.py [--steps 300] [--threads 1] [--only dfs-full,...] [--lr-sweep]
-Each run trains in its own process (for an honest peak memory), then is sampled and scored; finished runs are kept in
-runs/ablation/<name>/result.json and skipped when the script runs again. Writes results/ablation_orders.json,
-results/ablation_archs.json (command, commit, machine) and results/ablation_samples.png.
-The data: `generate_dataset('elm', 2400, 'data/elm48', max_branches=48, workers=1, seed=1)` (made here if missing): elms
-capped at 48 branches, so that a sequence is 400 tokens and nine runs fit in an hour on two shared cores.
-"""
+"""HourglassTree Tables 1 (orders, arch Full) and 2 (archs, order DFS) at CPU scale, scored by metrics.sample_scores; each
+run in its own process, kept in runs/ablation/<name>/result.json. Writes results/ablation_{orders,archs}.json and
+ablation_samples.png. Usage: python scripts/ablation.py [--steps 300] [--only dfs-full,...] [--lr-sweep]"""
 import argparse, json, os, platform, resource, subprocess, sys, time
 from pathlib import Path
 import provenance   # scripts/provenance.py, beside this script
 import numpy as np
-
-root = Path(__file__).resolve().parent.parent
-ORDER_RUNS = [("zyx", "full"), ("hilbert", "full"), ("dfs", "full"), ("bfs", "full")]
-ARCH_RUNS = [("dfs", "pt"), ("dfs", "hg1"), ("dfs", "hg2"), ("dfs", "hg2r"), ("dfs", "full")]
-
+ORDER_RUNS, ARCH_RUNS = [(o, "full") for o in ("zyx", "hilbert", "dfs", "bfs")], [("dfs", a) for a in ("pt", "hg1", "hg2", "hg2r", "full")]
 
 def one_run(a, order, arch, lr, out):
     "Train in this process, then score; write out/result.json."
-    import torch
-    torch.set_num_threads(a.threads)
-    from treebook.train import train, perplexity
-    from treebook.datasets import load_trees
-    from treebook.sampling import sample
-    from treebook.metrics import tree_clouds, evaluate, connect_rate, fpd
+    import torch; torch.set_num_threads(a.threads)
+    from treebook.train import train, perplexity, load_pretrained; from treebook.datasets import load_trees
+    from treebook.sampling import sample; from treebook.metrics import tree_clouds, sample_scores
     t0 = time.time()
-    r = train(a.data, out, order=order, arch=arch, dim=a.dim, depth=a.depth, heads=a.heads, batch_size=a.batch_size,
-              steps=a.steps, lr=lr, warmup=a.steps // 10, val_trees=a.val_trees, ckpt_every=a.steps, progress=False,
-              resume=(out / "last.pt").exists(), seed=a.seed)
-    train_s = r["seconds"]
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    model = r["model"]
-    from treebook.hourglass import TreeTransformer
-    from treebook.tokens import Tokenizer
-    model = TreeTransformer.load(out / "best.pt"); tok = Tokenizer.load(out / "tokenizer.json")
+    r = train(a.data, out, order=order, arch=arch, dim=a.dim, depth=a.depth, heads=a.heads, batch_size=a.batch_size, steps=a.steps, lr=lr,
+              warmup=a.steps // 10, val_trees=a.val_trees, ckpt_every=a.steps, progress=False, resume=(out / "last.pt").exists(), seed=a.seed)
+    peak_mb, (model, tok) = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, load_pretrained(out / "best.pt")
     test, trn = load_trees(a.data, "test"), load_trees(a.data, "train")
-    ppl = perplexity(model, tok.encode_batch(test, order), batch_size=16)
-    seqs = sample(model, a.samples, tok=tok, temperature=1.0, structure=True, min_len=24, seed=a.seed)
-    free = sample(model, a.samples, tok=tok, temperature=1.0, structure=False, min_len=24, seed=a.seed + 1)
-    gen = [g for g in (tok.decode(s) for s in seqs) if g.n]
     cache = Path(a.runs) / "reference_clouds.npz"  # held-out and (500) training clouds, made once for all runs
-    if not cache.exists():
-        R, T = tree_clouds(test, seed=2, progress=False), tree_clouds(trn[:500], seed=3, progress=False)
-        np.savez(cache, R=R, T=T)
+    if not cache.exists(): np.savez(cache, R=tree_clouds(test, seed=2, progress=False), T=tree_clouds(trn[:500], seed=3, progress=False))
     with np.load(cache) as z: R, T = z["R"], z["T"]
-    G = tree_clouds(gen, seed=1, progress=False)
-    s = evaluate(G, R, train=T)
-    per_epoch = len(trn) // a.batch_size
-    res = {"order": order, "arch": arch, "lr": lr, "steps": r["step"], "n_params": r["n_params"], "train_seconds": train_s,
-           "seconds_per_epoch": train_s / r["step"] * per_epoch, "peak_rss_mb": peak_mb, "PPL": ppl["ppl"],
-           "Connect": connect_rate(free, tok)["Connect"], "Connect_structure": connect_rate(seqs, tok)["Connect"],
-           "FPD": fpd(G, R), **{k: s[k] for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "Novel")},
-           "samples": len(gen), "wall_seconds": time.time() - t0}
-    for i, g in enumerate(gen[:4]): g.save(out / f"sample_{i}.npz")
-    (out / "result.json").write_text(json.dumps(res, indent=1))
-    print(json.dumps(res))
-
-
-def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--data", default="data/elm48"); p.add_argument("--runs", default="runs/ablation")
-    p.add_argument("--steps", type=int, default=300); p.add_argument("--dim", type=int, default=64)
-    p.add_argument("--depth", type=int, default=6); p.add_argument("--heads", type=int, default=4)
-    p.add_argument("--batch-size", type=int, default=8); p.add_argument("--lr", type=float, default=2e-3)
-    p.add_argument("--samples", type=int, default=64); p.add_argument("--val-trees", type=int, default=64)
-    p.add_argument("--threads", type=int, default=1); p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--only", default=None); p.add_argument("--lr-sweep", action="store_true")
-    p.add_argument("--_one", nargs=3, default=None, help=argparse.SUPPRESS)
-    a = p.parse_args()
-    if a._one:
-        order, arch, lr = a._one
-        return one_run(a, order, arch, float(lr), Path(a.runs) / f"{order}-{arch}-{lr}")
-    if not (Path(a.data) / "manifest.json").exists():
-        from treebook.datasets import generate_dataset
-        generate_dataset("elm", 2400, a.data, max_branches=48, workers=1, seed=1)
-    runs = ORDER_RUNS + [r for r in ARCH_RUNS if r not in ORDER_RUNS]
-    jobs = [(o, ar, a.lr) for o, ar in runs] + ([("dfs", "full", lr) for lr in (1e-3, 5e-3)] if a.lr_sweep else [])
-    if a.only: jobs = [j for j in jobs if f"{j[0]}-{j[1]}" in a.only.split(",")]
-    passthrough = [f"--{k.replace('_', '-')}={v}" for k, v in vars(a).items() if k not in ("only", "lr_sweep", "_one") and v is not None]
-    results = {}
-    for order, arch, lr in jobs:
-        out = Path(a.runs) / f"{order}-{arch}-{lr}"
-        if not (out / "result.json").exists():
-            print(f"== {order} / {arch} / lr {lr}", flush=True)
-            subprocess.run([sys.executable, __file__, *passthrough, "--_one", order, arch, str(lr)], check=True)
-        results[(order, arch, lr)] = json.loads((out / "result.json").read_text())
-    meta = {"command": "python scripts/ablation.py " + " ".join(sys.argv[1:]),
-            "commit": provenance.commit(),
-            "time": time.strftime("%Y-%m-%d %H:%M:%S"),
-            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads_per_run": a.threads,
-                        "note": "2 CPU cores shared with other jobs (the shipped model trained at the same time): times are comparable within a table only roughly"},
-            "setup": {k: v for k, v in vars(a).items() if k not in ("_one", "only")}}
-    (root / "results").mkdir(exist_ok=True)
-    tab1 = [results[(o, "full", a.lr)] for o, _ in ORDER_RUNS if (o, "full", a.lr) in results]
-    tab2 = [results[(o, ar, a.lr)] for o, ar in ARCH_RUNS if (o, ar, a.lr) in results]
-    if tab1: (root / "results" / "ablation_orders.json").write_text(json.dumps({**meta, "rows": tab1}, indent=1))
-    if tab2: (root / "results" / "ablation_archs.json").write_text(json.dumps({**meta, "rows": tab2}, indent=1))
-    sweep = [results[k] for k in results if k[:2] == ("dfs", "full")]
-    if len(sweep) > 1: (root / "results" / "ablation_lr.json").write_text(json.dumps({**meta, "rows": sweep}, indent=1))
-    if tab1:
-        from treebook.tree import Tree
-        from treebook.render import render, image_grid
-        ims, labels = [], []
-        for o, _ in ORDER_RUNS:
-            d = Path(a.runs) / f"{o}-full-{a.lr}"
-            for i in range(4):
-                f = d / f"sample_{i}.npz"
-                if f.exists(): ims.append(render(Tree.load(f), size=(200, 200), backend="matplotlib")); labels.append(f"{o} #{i}")
-        if ims: image_grid(ims, ncols=4, labels=labels).save(root / "results" / "ablation_samples.png")
-    print(json.dumps({"orders": tab1, "archs": tab2}, indent=1))
-
+    seqs, free = (sample(model, a.samples, tok=tok, temperature=1.0, structure=s, min_len=24, seed=a.seed + i) for i, s in ((0, True), (1, False)))
+    sc = sample_scores(seqs, free, tok, R, T); s = sc["scores"]
+    res = {"order": order, "arch": arch, "lr": lr, "steps": r["step"], "n_params": r["n_params"], "train_seconds": r["seconds"],
+           "seconds_per_epoch": r["seconds"] / r["step"] * (len(trn) // a.batch_size), "peak_rss_mb": peak_mb,
+           "PPL": perplexity(model, tok.encode_batch(test, order), batch_size=16)["ppl"], "Connect": sc["Connect_free"]["Connect"],
+           "Connect_structure": sc["Connect_structure"]["Connect"], "FPD": s["FPD"],
+           **{k: s[k] for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "Novel")}, "samples": len(sc["trees"]), "wall_seconds": time.time() - t0}
+    for i, g in enumerate(sc["trees"][:4]): g.save(out / f"sample_{i}.npz")
+    (out / "result.json").write_text(json.dumps(res, indent=1)); print(json.dumps(res))
 
 if __name__ == "__main__":
-    main()
+    p = argparse.ArgumentParser()
+    for k, v in dict(data="data/elm48", runs="runs/ablation", steps=300, dim=64, depth=6, heads=4, batch_size=8, lr=2e-3, samples=64,
+                     val_trees=64, threads=1, seed=0, only=None).items(): p.add_argument(f"--{k.replace('_', '-')}", type=str if v is None else type(v), default=v)
+    p.add_argument("--lr-sweep", action="store_true"); p.add_argument("--_one", nargs=3, default=None, help=argparse.SUPPRESS); a = p.parse_args()
+    if a._one: one_run(a, *a._one[:2], float(a._one[2]), Path(a.runs) / "-".join(a._one)); sys.exit()
+    if not (Path(a.data) / "manifest.json").exists(): __import__("treebook.datasets").datasets.generate_dataset("elm", 2400, a.data, max_branches=48, workers=1, seed=1)
+    jobs = [(o, ar, a.lr) for o, ar in ORDER_RUNS + [r for r in ARCH_RUNS if r not in ORDER_RUNS]] + ([("dfs", "full", lr) for lr in (1e-3, 5e-3)] if a.lr_sweep else [])
+    jobs = [j for j in jobs if not a.only or f"{j[0]}-{j[1]}" in a.only.split(",")]
+    passthrough, results = [f"--{k.replace('_', '-')}={v}" for k, v in vars(a).items() if k not in ("only", "lr_sweep", "_one") and v is not None], {}
+    for order, arch, lr in jobs:
+        if not (out := Path(a.runs) / f"{order}-{arch}-{lr}" / "result.json").exists():
+            print(f"== {order} / {arch} / lr {lr}", flush=True); subprocess.run([sys.executable, __file__, *passthrough, "--_one", order, arch, str(lr)], check=True)
+        results[(order, arch, lr)] = json.loads(out.read_text())
+    meta = {"command": "python scripts/ablation.py " + " ".join(sys.argv[1:]), "commit": provenance.commit(), "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads_per_run": a.threads, "note": "2 CPU cores shared with other "
+                        "jobs (the shipped model trained at the same time): times are comparable within a table only roughly"},
+            "setup": {k: v for k, v in vars(a).items() if k not in ("_one", "only")}}
+    tabs = {"orders": [results[(o, ar, a.lr)] for o, ar in ORDER_RUNS if (o, ar, a.lr) in results], "archs": [results[(o, ar, a.lr)] for o, ar in ARCH_RUNS if (o, ar, a.lr) in results],
+            "lr": [results[k] for k in results if k[:2] == ("dfs", "full")]}
+    for name, rows in tabs.items():
+        if len(rows) > (name == "lr"): (provenance.ROOT / "results" / f"ablation_{name}.json").write_text(json.dumps({**meta, "rows": rows}, indent=1))
+    if tabs["orders"]:
+        from treebook.tree import Tree
+        from treebook.render import render, image_grid
+        got = [(f, f"{o} #{i}") for o, _ in ORDER_RUNS for i in range(4) if (f := Path(a.runs) / f"{o}-full-{a.lr}" / f"sample_{i}.npz").exists()]
+        if got: image_grid([render(Tree.load(f), size=(200, 200), backend="matplotlib") for f, _ in got], ncols=4, labels=[l for _, l in got]).save(provenance.ROOT / "results" / "ablation_samples.png")
+    print(json.dumps({"orders": tabs["orders"], "archs": tabs["archs"]}, indent=1))
