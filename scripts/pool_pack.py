@@ -1,17 +1,12 @@
-"""Pack a TreePartNet scan pool (train_partnet.py's train_pool.npz / test_pool.npz) small enough to travel, and unpack it.
-
-Usage: python scripts/pool_pack.py pack tmp/partnet5 gpu/pools.npz [train|test]   (points as 16-bit steps of each scan's box,
-       python scripts/pool_pack.py unpack gpu/pools.npz[,MORE.npz...] tmp/partnet-gpu   1/65535 of its size; labels
-       python scripts/pool_pack.py make SEED N_PER_SPECIES gpu/pool-s2.npz              exact; the points of each scan
-                                                                                        in another order)
-Used to train on a machine that cannot scan (no open3d) from the pools made here; unpacked pools load like made ones.
-`make` scans a further train pool (trees 1000 * SEED + i, i < N_PER_SPECIES, of every species, 8,192 points: train_partnet.py's
-own pool is SEED 1, its test pools 999 and, with --test-seed, others) and packs it; `unpack` of several packed files puts their train scans in one pool.
-"""
-import sys
-from pathlib import Path
+"""Pack a TreePartNet scan pool (train_partnet.py's {train,test}_pool.npz) small enough to travel, and unpack it, to train
+on a machine that cannot scan (no open3d). Points: 16-bit steps of each scan's box, each scan's points in another order;
+labels exact. `make` scans and packs a further train pool (trees 1000 * SEED + i, i < N_PER_SPECIES, every species, 8,192
+points; train_partnet.py's own: SEED 1, tests 999); `unpack` of several files puts their train scans in one pool.
+Usage: python scripts/pool_pack.py pack tmp/partnet5 gpu/pools.npz [train|test]
+       python scripts/pool_pack.py unpack gpu/pools.npz[,MORE.npz...] tmp/partnet-gpu
+       python scripts/pool_pack.py make SEED N_PER_SPECIES gpu/pool-s2.npz"""
+import sys; from pathlib import Path
 import numpy as np
-
 def pack(work, dest, names=("train", "test")):
     out = {}
     for name in names:
@@ -26,7 +21,6 @@ def pack(work, dest, names=("train", "test")):
         out |= {f"{name}_{k}": v for k, v in dict(q=q, lo=lo, hi=hi, part=T.astype(np.int16), junction=J, offsets=off, species=sp).items()}
     Path(dest).parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(dest, **out)
-
 def _read(z, name):
     "One packed pool of `z` as (points, part, junction, offsets, species); None if `z` holds none of that name."
     if f"{name}_q" not in z: return None
@@ -34,7 +28,6 @@ def _read(z, name):
     scan = np.repeat(np.arange(len(g["offsets"]) - 1), np.diff(g["offsets"]))
     P = (g["lo"][scan] + g["q"] / 65535 * (g["hi"] - g["lo"])[scan]).astype(np.float32)
     return P, g["part"].astype(np.int32), g["junction"], g["offsets"], g["species"]
-
 def unpack(srcs, work):
     "The packed pools `srcs` (a comma-separated list) into `work`'s train_pool.npz and test_pool.npz, each pool's scans one after another."
     Path(work).mkdir(parents=True, exist_ok=True)
