@@ -7,7 +7,8 @@ Scans: procedural trees of all six species at two sizes (the preset's branch cou
 species' height in metres, scanned in the conditions of CONDITIONS; plus the real scans in ../shared/data/scans (surface
 columns only). Each is reconstructed by treebook (every --methods) and by ../shared/tools/adtree, and scored by
 ../shared/tools/score/metrics.py (F1 at 0.5 % of the diagonal, Chamfer %, length ratio, components; share of scan points
-within 1 % of the diagonal of the mesh). With --cli every run is a whole `treebook reconstruct` process, timed as AdTree is;
+within 1 % of the diagonal of the mesh). The row `truth` scores the reference tree's own mesh: on noisy scans
+even it leaves the moved points uncovered, so a mesh that covers more is modelling the noise. With --cli every run is a whole `treebook reconstruct` process, timed as AdTree is;
 without, treebook runs in this process (faster, for development) and its time leaves out the start-up.
 Per-run results are kept in --work, so an interrupted run resumes. AdTree and the yardstick are benchmark-only.
 """
@@ -97,6 +98,16 @@ def run_adtree(xyz, out):
     return (skel, mesh, s) if r.returncode == 0 and skel.exists() else (None, None, s)
 
 
+def run_truth(ref, out):
+    "The reference tree itself, meshed as treebook meshes: what a perfect skeleton and radii would score."
+    from treebook.mesh import tree_mesh, export_mesh
+    out.mkdir(parents=True, exist_ok=True)
+    z = np.load(ref)
+    obj = out / f"{Path(ref).stem}.obj"
+    export_mesh(tree_mesh(Tree(z["start"], z["end"], z["parent"], check=False), sides=12), obj)
+    return ref, obj, 0.0
+
+
 def run_treebook(xyz, out, method, cli):
     out.mkdir(parents=True, exist_ok=True)
     npz, obj = out / f"{xyz.stem}.npz", out / f"{xyz.stem}.obj"
@@ -161,7 +172,7 @@ def main():
     a = ap.parse_args()
     conds = [c for c in a.conditions.split(",") if c]
     if bad := sorted(set(conds) - set(CONDITIONS)): raise SystemExit(f"unknown conditions {bad}: choose from {list(CONDITIONS)}")
-    methods = [m for m in a.methods.split(",") if m] + ([] if a.no_adtree else ["adtree"])
+    methods = [m for m in a.methods.split(",") if m] + ([] if a.no_adtree else ["adtree"]) + ["truth"]
     if "adtree" in methods and not ADTREE.exists(): raise SystemExit(f"AdTree not found at {ADTREE} (use --no-adtree)")
     work = Path(a.work)
     todo = [prepare(work, *j) + (j[0],) for j in tqdm(jobs(a.per_species, conds), desc="scans")]
@@ -176,12 +187,14 @@ def main():
     rows = []
     runs = [(*t, m) for t in todo for m in methods]
     for name, xyz, ref, wood, cond, m in tqdm(runs, desc="runs"):
-        tag = m if m == "adtree" else f"{m}{'_cli' if a.cli else ''}{'_' + a.tag if a.tag else ''}"
+        tag = m if m in ("adtree", "truth") else f"{m}{'_cli' if a.cli else ''}{'_' + a.tag if a.tag else ''}"
         rec = work / "rows" / tag / f"{name}.json"
         if rec.exists():
             rows.append(json.loads(rec.read_text())); continue
         out = work / "out" / tag
-        skel, mesh, s = run_adtree(xyz, out / name) if m == "adtree" else run_treebook(xyz, out, m, a.cli)
+        if m == "truth" and ref is None: continue
+        if m == "truth": skel, mesh, s = run_truth(ref, out)
+        else: skel, mesh, s = run_adtree(xyz, out / name) if m == "adtree" else run_treebook(xyz, out, m, a.cli)
         row = dict(scan=name, condition=cond, method=tag, points=sum(1 for _ in open(xyz)), seconds=round(s, 3), ok=skel is not None)
         if skel is not None: row.update(score(skel, mesh, ref, xyz, wood))
         rec.parent.mkdir(parents=True, exist_ok=True); rec.write_text(json.dumps(row))

@@ -168,33 +168,96 @@ def cmd_propagate(args):
     return 0
 
 # %% ../nbs/11_cli.ipynb #44c140ad
-def cmd_reconstruct(args):
-    from treebook.reconstruct import reconstruct, coverage
+def _reconstruct_one(scan, out, mesh_out, skel_out, args) -> list:
+    "Reconstruct one scan and write its tree (and mesh and skeleton); the paths written."
+    from treebook.reconstruct import reconstruct, tree_coverage
     from treebook.pointio import read_points
-    from treebook.mesh import tree_mesh, export_mesh, export_skeleton
-    out = _out_path(args.out, (".npz", ".json"), "the tree file")
-    mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
-    skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
+    from treebook.mesh import export_mesh, export_skeleton
     t0 = time.time()
-    pts = read_points(args.scan, up=args.up)
+    pts = read_points(scan, up=args.up)
     made = reconstruct(pts, method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees,
                        radii=args.radii)
     made = made if args.trees == "all" else [made]
     print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} "
           f"branches) with {args.method} in {time.time() - t0:.1f} s")
-    meshes = [tree_mesh(t, sides=12).apply_translation(t.origin) for t in made]   # in the scan's coordinates
     print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's "
-          f"diagonal of {coverage(pts, meshes):.1%} of its {len(pts):,} points")
+          f"diagonal of {tree_coverage(pts, made):.1%} of its {len(pts):,} points")
     # --trees all: tree_1.npz, tree_2.npz ...
     numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p
     wrote = []
     with all_or_nothing():   # the tree, the mesh and the skeleton: all of them, or (if one cannot be written) none
-        for i, (tree, mesh) in enumerate(zip(made, meshes)):
+        for i, tree in enumerate(made):   # meshes in the scan's coordinates (export_mesh adds the origin back)
             wrote.append(tree.save(numbered(out, i)))
-            if mesh_out: wrote.append(export_mesh(mesh, numbered(mesh_out, i)))
+            if mesh_out: wrote.append(export_mesh(tree, numbered(mesh_out, i), sides=12))
             if skel_out: wrote.append(export_skeleton(tree, numbered(skel_out, i)))
-    for p in wrote: print(f"wrote {p}")
-    return 0
+    return wrote
+
+
+# %% ../nbs/11_cli.ipynb #04b06df0
+def _batch_format(value: str, ok: tuple, what: str) -> str:
+    "The file suffix that `--mesh` or `--skeleton` names for a batch (obj, .obj or x.obj all name .obj)."
+    s = value.lower()
+    s = Path(s).suffix or ("." + s.lstrip("."))
+    if s not in ok: raise TreebookError(f"{what} for several scans names a format ({', '.join(ok)}), got {value!r}")
+    return s
+
+
+# %% ../nbs/11_cli.ipynb #5b29b898
+def _scan_files(names) -> list:
+    "The scans named by `names`: files as given, folders as the point-cloud files in them (sorted); refused if none."
+    from treebook.pointio import POINT_FORMATS
+    files = []
+    for n in names:
+        p = Path(n)
+        if p.is_dir():
+            inside = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in POINT_FORMATS)
+            if not inside: raise TreebookError(f"no scans in folder {p} (looked for {' '.join(POINT_FORMATS)})")
+            files += inside
+        else: files.append(p)
+    stems = [f.stem for f in files]
+    if dup := sorted({s for s in stems if stems.count(s) > 1}):
+        raise TreebookError(f"two scans would write the same tree: {', '.join(dup)} (rename one)")
+    return files
+
+
+# %% ../nbs/11_cli.ipynb #2d574f91
+def _reconstruct_batch(args) -> int:
+    """Many scans in one process (the start-up is paid once): a tree (and mesh, skeleton) per scan in the folder
+    `--out`; a scan whose tree is there already is skipped, one that fails is reported on one line and the rest go on."""
+    from tqdm.auto import tqdm
+    fmt = lambda v, ok, what: None if v is None else _batch_format(v, ok, what)
+    mesh_fmt, skel_fmt = fmt(args.mesh, (".obj", ".glb", ".ply"), "--mesh"), fmt(args.skeleton, (".ply",), "--skeleton")
+    files = _scan_files(args.scan)
+    folder, _ = out_folder(args.out)
+    if Path(args.out).suffix.lower() in (".npz", ".json"):
+        raise TreebookError(f"several scans write one tree each into a folder: --out {args.out} names a file")
+    folder.mkdir(parents=True, exist_ok=True)
+    done = failed = 0
+    for f in tqdm(files, desc="scans", unit="scan", disable=None):
+        out = folder / f"{f.stem}.npz"
+        if out.exists() or (folder / f"{f.stem}_1.npz").exists(): done += 1; continue
+        try:
+            wrote = _reconstruct_one(f, out, mesh_fmt and out.with_suffix(mesh_fmt),
+                                     skel_fmt and out.with_name(f"{f.stem}_skeleton.ply"), args)
+            for p in wrote: print(f"wrote {p}")
+        except TreebookError as e:
+            failed += 1
+            print(f"error: {f.name}: {e}", file=sys.stderr)
+    print(f"{len(files) - done - failed} reconstructed, {done} already there, {failed} failed, of {len(files)} scans")
+    return 2 if failed else 0
+
+
+# %% ../nbs/11_cli.ipynb #4e5dd515
+def cmd_reconstruct(args):
+    "One scan to `--out FILE`; several scans or a folder to `--out FOLDER`, one tree each, in one process."
+    if len(args.scan) == 1 and not Path(args.scan[0]).is_dir():
+        out = _out_path(args.out, (".npz", ".json"), "the tree file")
+        mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
+        skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
+        for p in _reconstruct_one(Path(args.scan[0]), out, mesh_out, skel_out, args): print(f"wrote {p}")
+        return 0
+    return _reconstruct_batch(args)
+
 
 # %% ../nbs/11_cli.ipynb #45436cc7
 def cmd_train(args):
@@ -485,10 +548,12 @@ def _add_reconstruct(sub):
                        description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic "
                        "skeleton (classic), then join one connected tree in the scan's frame and units (one per stem "
                        "with --trees).")
-    s.add_argument("scan", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or .npy")
-    s.add_argument("--out", required=True, help="tree file (.npz or .json)")
-    s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply)")
-    s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges)")
+    s.add_argument("scan", nargs="+", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or "
+                   ".npy; several, or a folder, are done one after another in one process")
+    s.add_argument("--out", required=True, help="tree file (.npz or .json); a folder for several scans")
+    s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply); for several scans a format (obj, glb, ply)")
+    s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges; for several "
+                   "scans: ply)")
     s.add_argument("--method", default="paths", choices=["paths", "partnet", "classic"],
                    help="paths through the points (default), the neural decomposition, or geodesic level sets")
     s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")

@@ -8,13 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from .tree import Tree, TreebookError, _atomic_write, _placed, origin_for, too_far
 
 # %% auto #0
-__all__ = ['BARK', 'LEAF', 'MESH_FORMATS', 'continuation', 'tree_mesh', 'export_mesh', 'skeleton_nodes', 'export_skeleton',
-           'read_skeleton']
+__all__ = ['BARK', 'LEAF', 'MESH_FORMATS', 'continuation', 'tube_arrays', 'tree_mesh', 'export_mesh', 'skeleton_nodes',
+           'export_skeleton', 'read_skeleton']
 
 # %% ../nbs/01_mesh.ipynb #d3e9c4cc
 def _unit(v):
@@ -115,18 +114,11 @@ def _leaves(tree: Tree, per_tip: int, size: float, seed: int):
     faces = np.concatenate([front, front[:, ::-1]])
     return quad.reshape(-1, 3), faces, np.tile(np.repeat(tips, 1), 4)
 
-# %% ../nbs/01_mesh.ipynb #cf28a89a
-def tree_mesh(
-    tree: Tree,
-    sides: int = 10,
-    leaves: bool = False,
-    leaves_per_tip: int = 4,
-    leaf_size: float | None = None,
-    min_radius: float | None = None,
-    seed: int = 0,
-) -> trimesh.Trimesh:
-    """A mesh of tapered generalized cylinders along the branches (watertight without leaves), bark and leaf colours per
-    face."""
+# %% ../nbs/01_mesh.ipynb #b6300586
+def tube_arrays(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip: int = 4,
+                leaf_size: float | None = None, min_radius: float | None = None, seed: int = 0) -> tuple:
+    """(vertices, faces, branch of each face, number of bark faces) of the mesh that `tree_mesh` builds: numpy only,
+    for the command line, where importing trimesh costs more than meshing."""
     if not isinstance(tree, Tree): raise TreebookError(f"tree_mesh needs a Tree, got {type(tree).__name__}")
     if not tree.n: raise TreebookError("cannot mesh an empty tree")
     if not 3 <= sides <= 256: raise TreebookError(f"sides must be between 3 and 256, got {sides}")
@@ -153,11 +145,29 @@ def tree_mesh(
         size = leaf_size if leaf_size is not None else 0.04 * max(tree.height, tree.size / 2)
         lv, lf, lo = _leaves(tree, leaves_per_tip, size, seed)
         faces.append(lf + sum(len(x) for x in verts)); verts.append(lv); owner.append(lo)
-    faces, owner = np.concatenate(faces), np.concatenate(owner)
+    return np.concatenate(verts), np.concatenate(faces), np.concatenate(owner), nb
+
+# %% ../nbs/01_mesh.ipynb #cf28a89a
+def tree_mesh(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip: int = 4,
+              leaf_size: float | None = None, min_radius: float | None = None, seed: int = 0):
+    """A mesh of tapered generalized cylinders along the branches (watertight without leaves), bark and leaf colours per
+    face: a `trimesh.Trimesh` of `tube_arrays`."""
+    import trimesh
+    verts, faces, owner, nb = tube_arrays(tree, sides, leaves, leaves_per_tip, leaf_size, min_radius, seed)
     colors = np.tile(BARK, (len(faces), 1)); colors[nb:] = LEAF
-    mesh = trimesh.Trimesh(np.concatenate(verts), faces, face_colors=colors, process=False)
+    mesh = trimesh.Trimesh(verts, faces, face_colors=colors, process=False)
     mesh.metadata.update(face_branch=owner, face_leaf=np.arange(len(faces)) >= nb)
     return mesh
+
+
+# %% ../nbs/01_mesh.ipynb #d0992c3a
+def _obj_bytes(v, f, rgb) -> bytes:
+    "A Wavefront OBJ of vertices `v` (in double precision, eight decimals) coloured `rgb` (0-255) and triangles `f`."
+    rows = np.column_stack([v, np.tile(np.asarray(rgb[:3], np.float64) / 255, (len(v), 1))])
+    faces = np.asarray(f, np.int64) + 1
+    text = ("v %.8f %.8f %.8f %.8f %.8f %.8f\n" * len(rows)) % tuple(rows.ravel().tolist())
+    return ("# treebook mesh\n" + text + ("f %d %d %d\n" * len(faces)) % tuple(faces.ravel().tolist())).encode()
+
 
 # %% ../nbs/01_mesh.ipynb #c5e6d15f
 MESH_FORMATS = (".obj", ".glb", ".ply")
@@ -169,6 +179,10 @@ def export_mesh(obj, path, **mesh_kw) -> Path:
     ext = path.suffix.lower()
     if ext not in MESH_FORMATS:
         raise TreebookError(f"cannot export a mesh as {path.name!r}: use one of {', '.join(MESH_FORMATS)}")
+    if isinstance(obj, Tree) and ext == ".obj" and not mesh_kw.get("leaves"):   # numpy alone: no trimesh to import
+        v, f, _, _ = tube_arrays(obj, **mesh_kw)
+        return _atomic_write(path, lambda fh: fh.write(_obj_bytes(v + obj.origin, f, BARK)))
+    import trimesh
     mesh = tree_mesh(obj, **mesh_kw).apply_translation(obj.origin) if isinstance(obj, Tree) else obj
     if not isinstance(mesh, trimesh.Trimesh):
         raise TreebookError(f"export_mesh needs a Tree or a trimesh.Trimesh, got {type(obj).__name__}")

@@ -18,10 +18,45 @@ from .tree import Tree, TreebookError, origin_for, _placed
 from .pointio import read_points
 
 # %% auto #0
-__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'voxel_down', 'remove_ground', 'prepare_points',
-           'neighbour_graph', 'level_set_skeleton', 'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage',
-           'point_labels', 'pipe_radii', 'entry_nodes', 'branch_paths', 'path_skeleton', 'segment_radii', 'find_trees',
-           'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
+__all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'voxel_means', 'ransac_plane', 'voxel_down',
+           'remove_ground', 'prepare_points', 'neighbour_graph', 'level_set_skeleton', 'hermite_joins',
+           'sample_skeleton', 'skeleton_distance', 'coverage', 'tube_distance', 'tree_coverage', 'point_labels',
+           'pipe_radii', 'hop_tree', 'entry_nodes', 'branch_paths', 'cover_spurs', 'path_skeleton', 'segment_radii',
+           'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
+
+# %% ../nbs/09b_reconstruct.ipynb #0e57a668
+def voxel_means(points, size: float) -> np.ndarray:
+    """The mean of the points in each voxel of a grid `size` wide whose corner lies half a voxel below the lowest
+    point (the grid of open3d's `voxel_down_sample`), in the order of the voxels. numpy alone: importing open3d for
+    one grid costs more than a whole small reconstruction."""
+    p = np.asarray(points, np.float64)
+    idx = np.floor((p - (p.min(0) - 0.5 * size)) / size).astype(np.int64)
+    dims = idx.max(0) + 1
+    if float(np.prod(dims.astype(np.float64))) < 2.0 ** 62:
+        inv = np.unique(idx[:, 0] + dims[0] * (idx[:, 1] + dims[1] * idx[:, 2]), return_inverse=True)[1]
+    else: inv = np.unique(idx, axis=0, return_inverse=True)[1]
+    inv = inv.ravel()
+    cnt = np.bincount(inv)
+    return np.stack([np.bincount(inv, p[:, d]) for d in range(3)], 1) / cnt[:, None]
+
+
+# %% ../nbs/09b_reconstruct.ipynb #6dac7645
+def ransac_plane(points, tol: float, tries: int, rng) -> np.ndarray:
+    """Indices of the points within `tol` of the plane through three of `points` that holds most of them, of `tries`
+    planes drawn by the generator `rng` (RANSAC, as open3d's `segment_plane`, in numpy)."""
+    p = np.asarray(points, np.float64)
+    tri = p[rng.integers(0, len(p), (tries, 3))]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    ln = np.linalg.norm(n, axis=1)
+    if not (ln > 0).any(): return np.arange(0)
+    n, a = n[ln > 0] / ln[ln > 0, None], tri[ln > 0, 0]
+    e = -(n * a).sum(1)
+    best, most = 0, -1
+    for s in range(0, len(n), 64):   # 64 planes at a time: memory stays small
+        hold = (np.abs(p @ n[s:s + 64].T + e[s:s + 64]) <= tol).sum(0)
+        if hold.max() > most: best, most = s + int(np.argmax(hold)), int(hold.max())
+    return np.flatnonzero(np.abs(p @ n[best] + e[best]) <= tol)
+
 
 # %% ../nbs/09b_reconstruct.ipynb #c78bfb92
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
@@ -34,17 +69,16 @@ def _extent(p) -> np.ndarray:
 VOXEL = 0.0025  # the finest voxel of `prepare_points`, as a fraction of the cloud's diagonal (chosen on procedural scans, see "Even density")
 
 def voxel_down(points, max_points: int, min_size: float = 0.0) -> np.ndarray:
-    "`points` thinned on a voxel grid (open3d), voxels at least `min_size` wide and grown until at most `max_points` remain; unchanged if already small enough and `min_size` is 0."
+    """`points` thinned on a voxel grid (`voxel_means`), voxels at least `min_size` wide and grown until at most
+    `max_points` remain; unchanged if already small enough and `min_size` is 0."""
     big = len(points) > max_points
     if not big and not min_size > 0: return points
-    import open3d as o3d
-    pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     ext = _extent(points)
     vol = np.prod(np.maximum(ext, 1e-9 * np.linalg.norm(ext)))
     v = max((vol / max_points) ** (1 / 3) * 0.3, np.linalg.norm(ext) * 1e-4) if big else 0.0
     v = max(v, min_size)
     for _ in range(60):
-        q = np.asarray(pc.voxel_down_sample(v).points)
+        q = voxel_means(points, v)
         if len(q) <= max_points: return q
         v *= 1.25
     return q
@@ -78,7 +112,6 @@ def remove_ground(points, seed: int = 0, min_share: float = 0.05, max_tilt: floa
     if not isinstance(tries, (int, np.integer)) or tries < 1: raise TreebookError(f"tries must be a whole number >= 1, got {tries!r}")
     none = (p, np.zeros(len(p), bool)) + ((None,) if return_plane else ())
     if len(p) < 30: return none
-    import open3d as o3d
     rng = np.random.default_rng(seed)
     s = p[np.sort(rng.choice(len(p), 50_000, replace=False))] if len(p) > 50_000 else p  # the search runs on a sample
     dk = cKDTree(s).query(s, 9)[0][:, -1]
@@ -90,12 +123,10 @@ def remove_ground(points, seed: int = 0, min_share: float = 0.05, max_tilt: floa
     if not d > 0 or not h > 0: return none
     t = 0.01 * d                                                # RANSAC inlier distance
     rest = s[s[:, 2] <= lo[2] + 0.4 * h]                        # search the lowest 40% of the robust height only
-    o3d.utility.random.seed(int(seed))
     best = None
     for _ in range(tries):
         if len(rest) < max(30, min_share * len(s)): break
-        _, inl = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(rest)).segment_plane(distance_threshold=t, ransac_n=3, num_iterations=500)
-        inl = np.asarray(inl)
+        inl = ransac_plane(rest, t, 500, rng)
         cand, rest = rest[inl], np.delete(rest, inl, axis=0)
         if len(inl) < min_share * len(s): break                 # later planes are smaller still
         n, e = _plane_fit(cand)
@@ -349,6 +380,41 @@ def coverage(points, mesh, tol: float = 0.01) -> float:
     d = scene.compute_distance(o3d.core.Tensor((p - c).astype(np.float32))).numpy()
     return float((d <= tol * _diag(p)).mean())
 
+# %% ../nbs/09b_reconstruct.ipynb #9c00c34b
+def tube_distance(points, trees, k: int = 8, chunk: int = 100_000) -> np.ndarray:
+    """Distance (n,) of each of `points` to the surface of the tapered tubes of `trees` (a Tree or a list, each about
+    its `origin`): to the nearest of the `k` segments whose axes pass nearest, its distance to the axis less the
+    radius there. What `coverage` measures on a mesh, without building one."""
+    p = np.asarray(points, np.float64)
+    ts = list(trees) if isinstance(trees, (list, tuple)) else [trees]
+    c = p.mean(0)
+    S = np.concatenate([t.start.astype(np.float64) + np.r_[t.origin - c, 0] for t in ts])
+    E = np.concatenate([t.end.astype(np.float64) + np.r_[t.origin - c, 0] for t in ts])
+    p = p - c
+    L = np.linalg.norm(E[:, :3] - S[:, :3], axis=1)
+    h = max(float(L.max()) / 50, 1e-3 * _diag(np.r_[S[:, :3], E[:, :3]]), 1e-12)
+    m = np.maximum(1, np.ceil(L / h).astype(int))
+    own = np.repeat(np.arange(len(S)), m + 1)
+    u = np.concatenate([np.linspace(0, 1, x + 1) for x in m])
+    kd = cKDTree(S[own, :3] + u[:, None] * (E - S)[own, :3])
+    out = np.empty(len(p))
+    for a in range(0, len(p), chunk):
+        q = p[a:a + chunk]
+        seg = own[kd.query(q, min(k, len(own)))[1]].reshape(len(q), -1)     # candidate segments of each point
+        s, d = S[seg], E[seg] - S[seg]
+        t = np.clip(((q[:, None] - s[..., :3]) * d[..., :3]).sum(-1) / np.maximum((d[..., :3] ** 2).sum(-1), 1e-300), 0, 1)
+        axis = np.linalg.norm(q[:, None] - s[..., :3] - t[..., None] * d[..., :3], axis=-1)
+        out[a:a + chunk] = np.abs(axis - (s[..., 3] + t * d[..., 3])).min(1)
+    return out
+
+
+# %% ../nbs/09b_reconstruct.ipynb #1897255d
+def tree_coverage(points, trees, tol: float = 0.01) -> float:
+    "Share of `points` within `tol` x their bounding-box diagonal of the surface of the tubes of `trees` (`tube_distance`)."
+    p = np.asarray(points, np.float64)
+    return float((tube_distance(p, trees) <= tol * _diag(p)).mean())
+
+
 # %% ../nbs/09b_reconstruct.ipynb #ad5964bb
 def point_labels(points, kept, kept_labels, radius: float, chunk: int = 200_000) -> np.ndarray:
     "Label (n,) of each of `points`: that of its nearest point of `kept` with a label >= 0, or -1 if none lies within `radius`."
@@ -391,6 +457,20 @@ def pipe_radii(tree: Tree, exponent: float = 2.5, trunk: int = 5) -> Tree:
     end[:, 3] = r
     start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
     return Tree(start, end, par, check=False, origin=tree.origin, **tree.attrs)
+
+# %% ../nbs/09b_reconstruct.ipynb #2c2edadc
+def hop_tree(g, root: int, power: float = 2.0) -> tuple:
+    """(distance along the tree, predecessor) of each node of graph `g` in its shortest-path tree from `root`, where
+    an edge costs its length to the `power`: with 2, a path takes many short hops before one long jump, so it runs
+    along the points of a branch instead of leaping a gap to the next branch."""
+    if not (isinstance(power, (int, float, np.integer, np.floating)) and 1 <= power <= 4):
+        raise TreebookError(f"power must be a number in [1, 4], got {power!r}")
+    gp = g.tocsr(copy=True); gp.data = gp.data ** power
+    _, pred = dijkstra(gp, indices=root, return_predecessors=True)
+    i = np.flatnonzero(pred >= 0)
+    w = np.asarray(g.tocsr()[pred[i], i]).ravel()
+    tree = coo_matrix((w + 1e-12, (pred[i], i)), shape=g.shape)
+    return dijkstra(tree, indices=root), pred
 
 # %% ../nbs/09b_reconstruct.ipynb #e6e6c891
 def entry_nodes(b, geo, pred, g) -> np.ndarray:
@@ -448,21 +528,67 @@ def branch_paths(par, geo) -> tuple:
         stack += [(c, len(paths) - 1) for v in path[::-1] for c in kids[v] if c != heavy[v]]
     return paths, np.array(parent_path, np.int64)
 
+# %% ../nbs/09b_reconstruct.ipynb #648358a1
+def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float, min_points: int | None = None,
+                noisy_share: float = 0.08) -> tuple:
+    """(start, end, parent) of the skeleton's segments with spurs added to reach the `points` farther than `reach`
+    from it: from the farthest such point (by `geo`) back along its shortest path `pred` until the path comes within
+    `reach`, a vertex every `step` of `geo`, hung on the nearest vertex of the skeleton. A spur is made only if
+    `min_points` such points lie within `reach` of it; by default 1 if at most `noisy_share` of the points are that
+    far (a clean scan: a lone far point is a twig seen from afar), else 2 (a noisy scan: a lone one is likely noise)."""
+    q = np.asarray(points, np.float64)
+    start, end, parent = list(start), list(end), list(parent)
+    if not start: return start, end, parent
+    S, E = np.asarray(start, np.float64), np.asarray(end, np.float64)
+    k = np.maximum(1, np.ceil(np.linalg.norm(E - S, axis=1) / (0.25 * reach)).astype(int))
+    own = np.repeat(np.arange(len(S)), k + 1)
+    t = np.concatenate([np.linspace(0, 1, x + 1) for x in k])
+    done = cKDTree(S[own] + t[:, None] * (E - S)[own]).query(q)[0] <= reach
+    far = np.flatnonzero(~done)
+    if not len(far): return start, end, parent
+    kd = cKDTree(q[far])
+    if min_points is None: min_points = 1 if len(far) <= noisy_share * len(q) else 2
+    for i in far[np.argsort(-geo[far], kind="stable")]:
+        if done[i]: continue
+        chain = [i]
+        while pred[chain[-1]] >= 0 and not done[pred[chain[-1]]]: chain.append(pred[chain[-1]])
+        j = pred[chain[-1]]
+        near = np.unique(np.concatenate(kd.query_ball_point(q[chain], reach)).astype(np.int64))
+        done[chain] = True
+        if j < 0 or len(near) < min_points: continue
+        done[far[near]] = True
+        ps = int(np.argmin(np.linalg.norm(np.asarray(end) - q[j], axis=1)))   # hang on the nearest vertex
+        prev, last = np.asarray(end[ps], np.float64), -np.inf
+        for v in chain[::-1]:
+            if v != chain[0] and geo[v] - last < step: continue
+            last = geo[v]
+            start.append(prev); end.append(q[v]); parent.append(ps)
+            ps, prev = len(start) - 1, q[v]
+    return start, end, parent
+
 # %% ../nbs/09b_reconstruct.ipynb #cef271e9
-def path_skeleton(points, k: int = 10, bin_spacings: float = 1.0, twig: float = 2.0, step: float = 3.0,
-                  apart: float = 1.0, apart_diag: float = 0.004, twig_diag: float = 0.005) -> Tree:
-    """A connected skeleton `Tree` (radii not yet measured) of points (n, 3), z up, made of paths through the points:
-    nodes from `entry_nodes` on bins `bin_spacings` point spacings wide; `branch_paths` of the node tree; a path is
-    kept from where it leaves its parent by more than `apart` spacings, `apart_diag` of the diagonal and twice the
-    parent's spread, and as far from the paths already kept on that parent (nearer, it is one of them seen again) if it then runs, and ends, `twig` spacings and `twig_diag` of the diagonal away; a vertex every `step` spacings of its path, and at forks."""
+def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 1.0, step: float = 2.0,
+                  apart: float = 0.5, apart_diag: float = 0.002, twig_diag: float = 0.002, power: float = 2.0,
+                  smooth: bool = True, cover: float = 1.5, cover_points: int | None = None) -> Tree:
+    """A connected skeleton `Tree` (radii not yet measured) of points (n, 3), z up, made of paths through the points.
+    - nodes: `entry_nodes` on bins `bin_spacings` point spacings wide of the distance along `hop_tree` (edges cost
+      their length to the `power`) of the `k`-neighbour graph;
+    - paths: `branch_paths` of the node tree; a path is kept from where it leaves its parent by more than `apart`
+      spacings, `apart_diag` of the diagonal and twice the parent's spread, and as far from the paths already kept on
+      that parent, if it then runs, and ends, `twig` spacings and `twig_diag` of the diagonal away;
+    - vertices: every `step` spacings of a path and at forks, each (with `smooth`) the median of its node's centre and
+      its two neighbours' on the path;
+    - `cover_spurs` then reaches the points farther than `cover` spacings (0: none), with `cover_points` a spur at least."""
     q = np.asarray(points, np.float64)
     for name, v in (("bin_spacings", bin_spacings), ("twig", twig), ("step", step), ("apart", apart)):
         if not (isinstance(v, (int, float, np.integer, np.floating)) and 0 < v < 1000):
             raise TreebookError(f"{name} must be a number of point spacings in (0, 1000), got {v!r}")
+    if not (isinstance(cover, (int, float, np.integer, np.floating)) and 0 <= cover < 1000):
+        raise TreebookError(f"cover must be a number of point spacings in [0, 1000), got {cover!r}")
     g, idx, root = neighbour_graph(q, k)
     q = q[idx]
     spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1]))
-    geo, pred = dijkstra(g, indices=root, return_predecessors=True)
+    geo, pred = hop_tree(g, root, power)
     node = np.unique(entry_nodes(np.floor(geo / (bin_spacings * spacing)).astype(np.int64), geo, pred, g),
                      return_inverse=True)[1]
     m = node.max() + 1
@@ -492,6 +618,11 @@ def path_skeleton(points, k: int = 10, bin_spacings: float = 1.0, twig: float = 
             sibs.setdefault(pp, []).append(p)
         elif i > 0: continue                                 # one root: the first path's
         kept[i] = p
+    if smooth:   # a vertex is the median of its node's centre and its neighbours' on the path: a stray centre moves
+        pos = cen.copy()
+        for p in kept:
+            if p is not None and len(p) >= 3: pos[p[1:-1]] = np.median(np.stack([cen[p[:-2]], cen[p[1:-1]], cen[p[2:]]]), 0)
+        cen = pos
     forks = {a for a in attach if a is not None}
     start, end, parent, seg_end = [], [], [], {}
     for i, p in enumerate(kept):
@@ -506,6 +637,8 @@ def path_skeleton(points, k: int = 10, bin_spacings: float = 1.0, twig: float = 
             start.append(prev); end.append(cen[v]); parent.append(ps)
             ps, prev = len(start) - 1, cen[v]; seg_end[v] = ps
     if not start: raise TreebookError(f"the {len(q)} points make no skeleton: is this a tree scan?")
+    if cover:
+        start, end, parent = cover_spurs(q, geo, pred, start, end, parent, cover * spacing, step * spacing, cover_points)
     z = np.zeros((len(start), 1))
     return Tree(np.hstack([start, z]).astype(np.float32), np.hstack([end, z]).astype(np.float32), np.array(parent), check=False)
 
