@@ -21,11 +21,12 @@ from .tree import TreebookError, _atomic_write
 __all__ = ['ARCHS', 'CHECKPOINT_VERSION', 'PAD_TOKEN', 'ModelConfig', 'KVCache', 'Attention', 'Block', 'shorten', 'lengthen',
            'TreeTransformer', 'check_causal', 'DecodeState', 'check_cache']
 
-# %% ../nbs/04_hourglass.ipynb #57f6722c
+# %% ../nbs/04_hourglass.ipynb #7ca260fe
 ARCHS = ("pt", "hg1", "hg2", "hg2r", "full")
 CHECKPOINT_VERSION = 1  # bump when the layout of `TreeTransformer`'s weights changes
 PAD_TOKEN = 258         # the token contract's [PAD]: fills the internal padding to a whole branch
 
+# %% ../nbs/04_hourglass.ipynb #40c0ce39
 @dataclass
 class ModelConfig:
     "Hyper-parameters of a `TreeTransformer`; `arch` picks the variant of the paper's ablation."
@@ -130,7 +131,7 @@ def lengthen(x, k: int):
     "Duplicate each vector of `x` (B, L/k, C) `k` times."
     return x.repeat_interleave(k, dim=1)
 
-# %% ../nbs/04_hourglass.ipynb #4717f46c
+# %% ../nbs/04_hourglass.ipynb #3ecdd234
 class TreeTransformer(nn.Module):
     """The hourglass transformer of HourglassTree (or, with arch='pt', a plain transformer): tokens (B, L) -> logits (B,
     L, vocab)."""
@@ -156,39 +157,47 @@ class TreeTransformer(nn.Module):
         if isinstance(m, (nn.Linear, nn.Embedding)): nn.init.normal_(m.weight, std=0.02)
         if isinstance(m, nn.Linear) and m.bias is not None: nn.init.zeros_(m.bias)
 
-    def embed(self, idx, start: int = 0):
-        "Token + slot + branch embeddings of `idx` (B, T), the first of which sits at position `start`."
-        pos = torch.arange(start, start + idx.shape[1], device=idx.device)
-        return self.tok_emb(idx) + self.slot_emb(pos % 8) + self.branch_emb(pos // 8)
+# %% ../nbs/04_hourglass.ipynb #3593ed37
+@patch
+def embed(self: TreeTransformer, idx, start: int = 0):
+    "Token + slot + branch embeddings of `idx` (B, T), the first of which sits at position `start`."
+    pos = torch.arange(start, start + idx.shape[1], device=idx.device)
+    return self.tok_emb(idx) + self.slot_emb(pos % 8) + self.branch_emb(pos // 8)
 
-    def bottleneck(self, x, caches=None):
-        "The layers at the coarsest scale; the second half adds alpha times the first half's inputs (Eq. 1)."
-        n, half, skips = len(self.mid), len(self.alpha), []
-        for i, blk in enumerate(self.mid):
-            if i < half: skips.append(x)
-            x = blk(x, None if caches is None else caches[i])
-            if i >= n - half: x = x + self.alpha[n - 1 - i] * skips[n - 1 - i]
-        return x
+# %% ../nbs/04_hourglass.ipynb #4ca37a9f
+@patch
+def bottleneck(self: TreeTransformer, x, caches=None):
+    "The layers at the coarsest scale; the second half adds alpha times the first half's inputs (Eq. 1)."
+    n, half, skips = len(self.mid), len(self.alpha), []
+    for i, blk in enumerate(self.mid):
+        if i < half: skips.append(x)
+        x = blk(x, None if caches is None else caches[i])
+        if i >= n - half: x = x + self.alpha[n - 1 - i] * skips[n - 1 - i]
+    return x
 
-    def forward(self, idx):
-        B, L = idx.shape
-        if L > self.config.max_len:
-            raise TreebookError(f"sequence of {L} tokens is longer than the model's max_len {self.config.max_len}")
-        g = self.config.group
-        idx = F.pad(idx, (0, -L % g), value=PAD_TOKEN)
-        x, skips = self.embed(idx), []
-        for blk, k in zip(self.down, self.config.factors):
-            x = blk(x); skips.append(x)
-            x = shorten(x, k)
-        x = self.bottleneck(x)
-        for blk, k, s in zip(self.up[::-1], self.config.factors[::-1], skips[::-1]):
-            x = blk(lengthen(x, k) + s)
-        return self.head(self.ln_f(x[:, :L]))
+# %% ../nbs/04_hourglass.ipynb #43045716
+@patch
+def forward(self: TreeTransformer, idx):
+    "Logits (B, L, vocab) of the tokens `idx` (B, L): embed, down, bottleneck, up, head."
+    B, L = idx.shape
+    if L > self.config.max_len:
+        raise TreebookError(f"sequence of {L} tokens is longer than the model's max_len {self.config.max_len}")
+    g = self.config.group
+    idx = F.pad(idx, (0, -L % g), value=PAD_TOKEN)
+    x, skips = self.embed(idx), []
+    for blk, k in zip(self.down, self.config.factors):
+        x = blk(x); skips.append(x)
+        x = shorten(x, k)
+    x = self.bottleneck(x)
+    for blk, k, s in zip(self.up[::-1], self.config.factors[::-1], skips[::-1]):
+        x = blk(lengthen(x, k) + s)
+    return self.head(self.ln_f(x[:, :L]))
 
-    @property
-    def n_params(self) -> int:
-        "Number of trainable parameters (the tied head counted once)."
-        return sum(p.numel() for p in self.parameters())
+# %% ../nbs/04_hourglass.ipynb #c015137f
+@patch(as_prop=True)
+def n_params(self: TreeTransformer) -> int:
+    "Number of trainable parameters (the tied head counted once)."
+    return sum(p.numel() for p in self.parameters())
 
 # %% ../nbs/04_hourglass.ipynb #a42a53b1
 def check_causal(model, length: int = 21, batch: int = 2, seed: int = 0, tol: float = 1e-5) -> float:
