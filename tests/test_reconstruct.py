@@ -97,7 +97,7 @@ def test_real_scans(shared_scans, name):
 
 
 def test_demo(tmp_path):
-    from treebook.reconstruct import demo_reconstruct
+    from treebook.demos import demo_reconstruct
     paths = demo_reconstruct(tmp_path, method="classic")
     assert all(p.exists() and p.stat().st_size > 0 for p in paths)
     one_tree(Tree.load(paths[0]))

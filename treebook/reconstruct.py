@@ -22,7 +22,7 @@ __all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'vox
            'remove_ground', 'prepare_points', 'neighbour_graph', 'level_set_skeleton', 'hermite_joins',
            'sample_skeleton', 'skeleton_distance', 'coverage', 'tube_distance', 'tree_coverage', 'point_labels',
            'pipe_radii', 'hop_tree', 'entry_nodes', 'branch_paths', 'cover_spurs', 'path_skeleton', 'segment_radii',
-           'find_trees', 'wood_points', 'wood_mask', 'reconstruct', 'demo_reconstruct', 'demo_trees']
+           'find_trees', 'wood_points', 'wood_mask', 'reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #0e57a668
 def voxel_means(points, size: float) -> np.ndarray:
@@ -795,50 +795,3 @@ def reconstruct(points, method: str = "paths", up: str = "z", foliage=False, see
 
 # %% ../nbs/09b_reconstruct.ipynb #c15bc628
 SHIPPED_SCAN = Path(__file__).parent / "data" / "scans" / "tree13.xyz" if "__file__" in globals() else Path("../treebook/data/scans/tree13.xyz")
-
-def demo_reconstruct(out_dir, seed: int = 0, method: str | None = None) -> list:
-    "Reconstruct the shipped real scan into `out_dir`: tree .npz, mesh .obj (and one with the pipe model's radii), skeleton .ply and a .png; returns the paths."
-    from treebook.mesh import tree_mesh, export_mesh, export_skeleton
-    from treebook.render import render, image_grid
-    from treebook.partnet import WEIGHTS
-    from treebook.tree import _atomic_write
-    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
-    method = method or ("partnet" if WEIGHTS.exists() else "classic")
-    pts = read_points(SHIPPED_SCAN)
-    tree = reconstruct(pts, method=method, seed=seed)
-    mesh = tree_mesh(tree, sides=12)
-    piped = tree_mesh(pipe_radii(tree), sides=12)
-    paths = [tree.save(out / "reconstructed_tree13.npz"), export_mesh(mesh, out / "reconstructed_tree13.obj"),
-             export_mesh(piped, out / "reconstructed_tree13_pipe.obj"), export_skeleton(tree, out / "reconstructed_tree13_skeleton.ply")]
-    skel = sample_skeleton(tree, _diag(pts) / 600)
-    img = image_grid([render(pts, view="front", size=(320, 400)), render(skel, view="front", size=(320, 400), point_size=1.5),
-                      render(mesh, view="front", size=(320, 400)), render(piped, view="front", size=(320, 400))], ncols=4,
-                     labels=["scan", f"skeleton ({method})", "mesh", "mesh, pipe-model radii"])
-    png = out / "reconstructed_tree13.png"
-    _atomic_write(png, lambda f: img.save(f, format="PNG"))
-    return [Path(p) for p in paths] + [png]
-
-# %% ../nbs/09b_reconstruct.ipynb #01749879
-def demo_trees(out_dir, seed: int = 0, method: str | None = None) -> list:
-    "Two trees in one scan (the shipped real scan and a turned copy of it), reconstructed one by one into `out_dir`: tree_N.npz, tree_N.obj and a .png; returns the paths."
-    from treebook.mesh import tree_mesh, export_mesh
-    from treebook.render import render, image_grid
-    from treebook.partnet import WEIGHTS
-    from treebook.tree import _atomic_write
-    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
-    method = method or ("partnet" if WEIGHTS.exists() else "classic")
-    pts = read_points(SHIPPED_SCAN)
-    c = pts.mean(0)
-    both = np.vstack([pts, (pts - c) * [-1, -1, 1] + c + [1.2 * np.ptp(pts[:, 0]), 0, 0]])
-    made = reconstruct(both, method=method, seed=seed, trees="all")
-    paths, meshes = [], []
-    for i, t in enumerate(made):
-        m = tree_mesh(t, sides=12)
-        paths += [t.save(out / f"tree_{i + 1}.npz"), export_mesh(m, out / f"tree_{i + 1}.obj")]
-        m.visual.face_colors = [(105, 78, 52, 255), (52, 92, 140, 255)][i % 2]
-        meshes.append(m)
-    img = image_grid([render(both, view="front", size=(480, 320)), render(meshes, view="front", size=(480, 320))], ncols=2,
-                     labels=["one scan", f"{len(made)} tree{'s' if len(made) > 1 else ''} ({method})"])
-    png = out / "trees.png"
-    _atomic_write(png, lambda f: img.save(f, format="PNG"))
-    return [Path(p) for p in paths] + [png]
