@@ -67,6 +67,14 @@ def neighbour_graph(points, k: int = 10) -> tuple:
 # %% ../nbs/09b_reconstruct.ipynb #98608482
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
 
+def _ladder(k) -> tuple:
+    "(owner, fraction) of the points that cut piece i into k[i] equal steps, ends included: `np.linspace` for all at once."
+    k = np.asarray(k, np.int64)
+    own = np.repeat(np.arange(len(k)), k + 1)
+    first = np.r_[0, np.cumsum(k + 1)[:-1]]
+    return own, (np.arange(len(own)) - first[own]) / k[own]
+
+
 # %% ../nbs/09b_reconstruct.ipynb #ff1f04d4
 def _axis_dist(p, a, t):
     "Distances of points `p` to the line through `a` with unit direction `t`."
@@ -529,12 +537,12 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
     if not start: return start, end, parent
     S, E = np.asarray(start, np.float64), np.asarray(end, np.float64)
     k = np.maximum(1, np.ceil(np.linalg.norm(E - S, axis=1) / (0.25 * reach)).astype(int))
-    own = np.repeat(np.arange(len(S)), k + 1)
-    t = np.concatenate([np.linspace(0, 1, x + 1) for x in k])
+    own, t = _ladder(k)
     done = cKDTree(S[own] + t[:, None] * (E - S)[own]).query(q)[0] <= reach
     far = np.flatnonzero(~done)
     if not len(far): return start, end, parent
     kd = cKDTree(q[far])
+    ends = np.empty((len(E) + len(far), 3)); ends[:len(E)] = E[:, :3]   # every vertex, those of new spurs too
     if min_points is None: min_points = 1 if len(far) <= noisy_share * len(q) else 2
     for i in far[np.argsort(-geo[far], kind="stable")]:
         if done[i]: continue
@@ -545,12 +553,12 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
         done[chain] = True
         if j < 0 or len(near) < min_points: continue
         done[far[near]] = True
-        ps = int(np.argmin(np.linalg.norm(np.asarray(end) - q[j], axis=1)))   # hang on the nearest vertex
+        ps = int(np.argmin(((ends[:len(end)] - q[j]) ** 2).sum(1)))   # hang on the nearest vertex
         prev, last = np.asarray(end[ps], np.float64), -np.inf
         for v in chain[::-1]:
             if v != chain[0] and geo[v] - last < step: continue
             last = geo[v]
-            start.append(prev); end.append(q[v]); parent.append(ps)
+            ends[len(end)] = q[v]; start.append(prev); end.append(q[v]); parent.append(ps)
             ps, prev = len(start) - 1, q[v]
     return start, end, parent
 
@@ -646,8 +654,7 @@ def segment_radii(tree: Tree, points, min_points: int = 3, return_segment: bool 
     spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1])) if len(q) > 1 else _diag(s)
     L = np.linalg.norm(e - s, axis=1)
     k = np.maximum(1, np.ceil(L / max(0.5 * spacing, 1e-12)).astype(int))
-    own = np.repeat(np.arange(tree.n), k + 1)
-    t = np.concatenate([np.linspace(0, 1, x + 1) for x in k])
+    own, t = _ladder(k)
     seg = own[cKDTree(s[own] + t[:, None] * (e - s)[own]).query(q)[1]]
     d = e[seg] - s[seg]
     u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
@@ -751,8 +758,7 @@ def tube_distance(points, trees, k: int = 8, chunk: int = 100_000) -> np.ndarray
     L = np.linalg.norm(E[:, :3] - S[:, :3], axis=1)
     h = max(float(L.max()) / 50, 1e-3 * _diag(np.r_[S[:, :3], E[:, :3]]), 1e-12)
     m = np.maximum(1, np.ceil(L / h).astype(int))
-    own = np.repeat(np.arange(len(S)), m + 1)
-    u = np.concatenate([np.linspace(0, 1, x + 1) for x in m])
+    own, u = _ladder(m)
     kd = cKDTree(S[own, :3] + u[:, None] * (E - S)[own, :3])
     out = np.empty(len(p))
     for a in range(0, len(p), chunk):

@@ -1,0 +1,53 @@
+"""Whole-process time of one scan, treebook beside AdTree, on the scans of benchmarks/peer.py (run it first).
+
+Usage: python benchmarks/reconstruct_speed.py [--work tmp/peer] [--conditions sparse,...] [--out results/reconstruct_speed.json]
+
+For each condition: AdTree (`adtree SCAN OUT`) and `treebook reconstruct SCAN --out T.npz --mesh T.obj` as one process per
+scan, and `treebook reconstruct SCAN... --out DIR --mesh obj` as one process for all the condition's scans (the start-up
+paid once), its time divided by the number of scans. Wall-clock seconds; the load average at the start is recorded, since
+other jobs on the machine slow every column alike.
+"""
+import argparse, json, os, subprocess, sys, tempfile, time
+from pathlib import Path
+
+import numpy as np
+
+root = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(root / "scripts")); sys.path.insert(0, str(root / "benchmarks"))
+import provenance  # noqa: E402
+from peer import ADTREE, CONDITIONS  # noqa: E402
+
+TREEBOOK = str(Path(sys.executable).parent / "treebook")
+
+
+def wall(cmd) -> float:
+    t = time.perf_counter()
+    r = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
+    if r.returncode: raise SystemExit(f"{' '.join(map(str, cmd))} failed: {r.stderr.strip()[-300:]}")
+    return time.perf_counter() - t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--work", default=str(root / "tmp" / "peer"))
+    ap.add_argument("--conditions", default=",".join(CONDITIONS))
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    res, load = {}, os.getloadavg()[0]
+    for c in a.conditions.split(","):
+        scans = sorted(Path(a.work, "scans").glob(f"{c}_*[0-9].xyz"))
+        if not scans: raise SystemExit(f"no scans of {c} in {a.work}/scans: run benchmarks/peer.py first")
+        with tempfile.TemporaryDirectory() as d:
+            ad = [wall([ADTREE, s, Path(d, "ad", s.stem)]) for s in scans]
+            one = [wall([TREEBOOK, "reconstruct", s, "--out", Path(d, f"{s.stem}.npz"), "--mesh", Path(d, f"{s.stem}.obj")])
+                   for s in scans]
+            batch = wall([TREEBOOK, "reconstruct", *scans, "--out", Path(d, "batch"), "--mesh", "obj"]) / len(scans)
+        res[c] = dict(scans=len(scans), points=int(np.mean([sum(1 for _ in open(s)) for s in scans])),
+                      adtree=round(float(np.mean(ad)), 3), treebook=round(float(np.mean(one)), 3),
+                      treebook_batch=round(batch, 3))
+        print(c, res[c], flush=True)
+    if a.out: provenance.record("benchmarks/reconstruct_speed.py", dict(load_at_start=round(load, 2), seconds=res), a.out)
+
+
+if __name__ == "__main__":
+    main()
