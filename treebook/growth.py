@@ -220,28 +220,12 @@ def condition_prefix(model: TreeTransformer, prefix=None, bias=None):
         return torch.cat([x[:, :k] + pre, x[:, k:]], 1)
     with wrap_embed(model, add): yield model
 
-# %% ../nbs/10_growth_and_conditioning.ipynb #0fab92b1
+# %% ../nbs/10_growth_and_conditioning.ipynb #e258fd42
 @torch.no_grad()
-def generate(
-    model: TreeTransformer,
-    n: int = 1,
-    *,
-    tok: Tokenizer,
-    prompt=None,
-    prefix=None,
-    bias=None,
-    stages: int = 1,
-    mode: str = "incremental",
-    min_new: int = 0,
-    max_len: int | None = None,
-    temperature: float = 1.0,
-    top_k: int | None = None,
-    top_p: float | None = None,
-    structure: bool = True,
-    fair_stops: bool = True,
-    seed: int = 0,
-    progress: bool = False
-) -> list:
+def generate(model: TreeTransformer, n: int = 1, *, tok: Tokenizer, prompt=None, prefix=None, bias=None,
+             stages: int = 1, mode: str = "incremental", min_new: int = 0, max_len: int | None = None,
+             temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None, structure: bool = True,
+             fair_stops: bool = True, seed: int = 0, progress: bool = False) -> list:
     """`n` token sequences (without the condition positions) continuing `prompt` (default: 8 [SOS]) after a condition
     `prefix` (and with a condition `bias` on every position): `sampling.sample` with a `StagedGrammar`."""
     if stages < 1: raise TreebookError(f"stages must be at least 1, got {stages}")
@@ -256,8 +240,7 @@ def generate(
     if full.shape[1] + 2 * BLOCK > max_len:
         raise TreebookError(
             f"the prompt ({full.shape[1] - P0} tokens{f' after {P0} condition positions' if P0 else ''}) leaves no "
-            f"room below the model's max_len {max_len}: give a smaller partial tree"
-        )
+            f"room below the model's max_len {max_len}: give a smaller partial tree")
     rules = partial(StagedGrammar, offset=P0, stages=stages, restart=mode == "full")
     with condition_prefix(model, prefix, bias):
         return sample(model, n, tok=tok, prompt=full, max_len=max_len, min_len=full.shape[1] + BLOCK * int(min_new),
@@ -273,54 +256,39 @@ def on_device(batch, device):
     if isinstance(batch, dict): return {k: on_device(v, device) for k, v in batch.items()}
     return batch
 
-# %% ../nbs/10_growth_and_conditioning.ipynb #83fcc723
-def fit(
-    model: torch.nn.Module,
-    batch,
-    loss,
-    out_dir,
-    steps: int,
-    lr: float = 2e-3,
-    warmup: int = 50,
-    weight_decay: float = 0.1,
-    grad_clip: float = 1.0,
-    ckpt_every: int = 25,
-    log_every: int = 5,
-    resume: bool = True,
-    time_limit: float | None = None,
-    progress: bool = True,
-    meta: dict | None = None,
-) -> dict:
-    """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a
-    summary. Batches follow the model to its device: move the model to a GPU first to train there."""
-    from treebook.train import lr_at
-    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
+# %% ../nbs/10_growth_and_conditioning.ipynb #91c1a3d4
+def _fit_start(model, out: Path, params: list, lr: float, weight_decay: float, resume: bool) -> tuple:
+    """(AdamW over `params`, step, seconds so far) of the run in `out`: restored from its last.pt (only if `resume`),
+    or a new one with the header of its log.csv."""
     last, log_path = out / "last.pt", out / "log.csv"
-    params = [p for p in model.parameters() if p.requires_grad]
-    opt = torch.optim.AdamW(
-        [
-            {"params": [p for p in params if p.dim() >= 2], "weight_decay": weight_decay},
-            {"params": [p for p in params if p.dim() < 2], "weight_decay": 0.0},
-        ],
-        lr=lr,
-        betas=(0.9, 0.95),
-    )
-    step, seconds, dev = 0, 0.0, next(model.parameters()).device
+    opt = torch.optim.AdamW([{"params": [p for p in params if p.dim() >= 2], "weight_decay": weight_decay},
+                             {"params": [p for p in params if p.dim() < 2], "weight_decay": 0.0}],
+                            lr=lr, betas=(0.9, 0.95))
+    step, seconds = 0, 0.0
     if last.exists():
         if not resume: raise TreebookError(f"{out} already holds a run (last.pt): resume it or choose another folder")
         ck = torch.load(last, map_location="cpu", weights_only=True)
         model.load_state_dict(ck["model"]); opt.load_state_dict(ck["opt"]); step, seconds = ck["step"], ck["seconds"]
     elif not log_path.exists() or not resume:
         _atomic_write(log_path, lambda f: f.write(b"step,lr,loss,seconds\n"))
+    return opt, step, seconds
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #b0bef261
+def fit(model: torch.nn.Module, batch, loss, out_dir, steps: int, lr: float = 2e-3, warmup: int = 50,
+        weight_decay: float = 0.1, grad_clip: float = 1.0, ckpt_every: int = 25, log_every: int = 5,
+        resume: bool = True, time_limit: float | None = None, progress: bool = True, meta: dict | None = None) -> dict:
+    """Train `model` on `loss(model, batch(step))` for `steps` steps in all, resumable from `out_dir/last.pt`; returns a
+    summary. Batches follow the model to its device: move the model to a GPU first to train there."""
+    from treebook.train import lr_at
+    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
+    last, log_path = out / "last.pt", out / "log.csv"
+    params = [p for p in model.parameters() if p.requires_grad]
+    dev = next(model.parameters()).device
+    opt, step, seconds = _fit_start(model, out, params, lr, weight_decay, resume)
     t0, running = time.time(), []
     def save():
-        ck = {
-            "model": model.state_dict(),
-            "opt": opt.state_dict(),
-            "step": step,
-            "seconds": seconds + time.time() - t0,
-            "meta": meta or {},
-        }
+        ck = {"model": model.state_dict(), "opt": opt.state_dict(), "step": step,
+              "seconds": seconds + time.time() - t0, "meta": meta or {}}
         _atomic_write(last, lambda f: torch.save(ck, f))
     bar = tqdm(total=steps, initial=step, desc="fit", disable=not progress)
     while step < steps:
@@ -332,21 +300,15 @@ def fit(
         opt.step(); step += 1; running.append(float(value)); bar.update(1); bar.set_postfix(loss=f"{running[-1]:.3f}")
         if step % log_every == 0 or step == steps:
             with open(log_path, "a") as f:
-                f.write(
-                    f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},"
-                    f"{seconds + time.time() - t0:.1f}\n"
-                )
+                f.write(f"{step},{lr_at(step - 1, steps, lr, warmup):.6g},{np.mean(running):.6g},"
+                        f"{seconds + time.time() - t0:.1f}\n")
             running = []
         if step % ckpt_every == 0 or step == steps: save()
         if time_limit and time.time() - t0 > time_limit: save(); break
     bar.close(); model.eval()
     rows = list(csv.DictReader(open(log_path)))
-    return {
-        "step": step,
-        "steps": steps,
-        "seconds": seconds + time.time() - t0,
-        "loss": float(rows[-1]["loss"]) if rows else None,
-    }
+    return {"step": step, "steps": steps, "seconds": seconds + time.time() - t0,
+            "loss": float(rows[-1]["loss"]) if rows else None}
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #8dfb6414
 def growth_batch(trees, tok: Tokenizer, step: int, batch_size: int = 8, seed: int = 0, stages: int = 10,
