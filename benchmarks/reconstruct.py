@@ -179,7 +179,7 @@ def main():
     ap.add_argument("--out", default=str(root / "results" / "reconstruct.json"))
     a = ap.parse_args()
     import torch; torch.set_num_threads(a.threads)
-    methods = ["classic"] + (["partnet"] if Path(a.weights).exists() else [])
+    methods = ["paths", "classic"] + (["partnet"] if Path(a.weights).exists() else [])
     skip = set(a.skip.split(","))
     if a.only: skip = set(PARTS) - set(a.only.split(","))
     rows = tuple(r for r in a.cluster_rows.split(",") if r)
