@@ -67,13 +67,14 @@ def neighbour_graph(points, k: int = 10) -> tuple:
 # %% ../nbs/09b_reconstruct.ipynb #98608482
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
 
+# %% ../nbs/09b_reconstruct.ipynb #dd805b3c
 def _ladder(k) -> tuple:
-    "(owner, fraction) of the points that cut piece i into k[i] equal steps, ends included: `np.linspace` for all at once."
+    ("(owner, fraction) of the points that cut piece i into k[i] equal steps, ends included: `np.linspace` for all at "
+     "once.")
     k = np.asarray(k, np.int64)
     own = np.repeat(np.arange(len(k)), k + 1)
     first = np.r_[0, np.cumsum(k + 1)[:-1]]
     return own, (np.arange(len(own)) - first[own]) / k[own]
-
 
 # %% ../nbs/09b_reconstruct.ipynb #ff1f04d4
 def _axis_dist(p, a, t):
