@@ -94,49 +94,63 @@ def mst_tree(nodes, k: int = 8, trunk_radius: float | None = None, tip: float | 
     if len(p) < 2: raise TreebookError(f"a tree needs at least 2 distinct nodes, got {len(p)}")
     return nodes_tree(*_mst_nodes(p, k), trunk_radius=trunk_radius, tip=tip, exponent=exponent)
 
-# %% ../nbs/08a_lsystem.ipynb #5b6144f9
+# %% ../nbs/08a_lsystem.ipynb #93788984
+def _compact(p, keep, par):
+    "(nodes, parents) of the nodes `keep` of the tree (`p`, `par`), renumbered; `par` already names kept nodes only."
+    new = np.cumsum(keep) - 1
+    q = par[keep]; q = np.where(q >= 0, new[np.maximum(q, 0)], -1)
+    return p[keep], q
+
+# %% ../nbs/08a_lsystem.ipynb #5ea63870
+def _prune_spurs(p, par, min_len: float):
+    "(nodes, parents) without the unbranched runs to a leaf, shorter than `min_len`, that leave a fork."
+    m = len(p)
+    nch = np.bincount(par[1:], minlength=m).tolist(); pl = par.tolist()
+    seg = [0.0] + np.linalg.norm(p[1:] - p[par[1:]], axis=1).tolist()
+    acc = [0.0] * m                                   # length of the unbranched run ending at each node
+    for i in range(1, m):
+        a = pl[i]; acc[i] = seg[i] + (acc[a] if a != 0 and nch[a] == 1 else 0.0)
+    keep = np.ones(m, bool)
+    for leaf in [i for i in range(1, m) if nch[i] == 0 and acc[i] < min_len]:
+        run, i = [leaf], pl[leaf]
+        while i != 0 and nch[i] == 1: run.append(i); i = pl[i]
+        if nch[i] >= 2: keep[run] = False              # a spur off a fork; a bare chain is left alone
+    return (p, par) if keep.all() else _compact(p, keep, par)
+
+# %% ../nbs/08a_lsystem.ipynb #434009e8
+def _merge_straight(p, par, child, one, cmax: float, lmax2: float):
+    """(nodes, parents) without the nodes of one child (`one`) where the path parent-node-child turns by an angle of
+    cosine above `cmax` and the merged internode is at most `lmax2` long, squared."""
+    m = len(p)
+    P = p.tolist(); pl = par.tolist(); cl = child.tolist(); one = one.tolist()
+    keep = [True] * m; rep = list(range(m)); newpar = list(pl)
+    for i in range(1, m):
+        a = rep[pl[i]]; newpar[i] = a
+        if not one[i]: continue
+        c = cl[i]; x, y, z = P[i]; ax, ay, az = P[a]; cx, cy, cz = P[c]
+        u = (x - ax, y - ay, z - az); v = (cx - x, cy - y, cz - z)
+        uu, vv = u[0] ** 2 + u[1] ** 2 + u[2] ** 2, v[0] ** 2 + v[1] ** 2 + v[2] ** 2
+        uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+        if uv > cmax * (uu * vv) ** 0.5 and (cx - ax) ** 2 + (cy - ay) ** 2 + (cz - az) ** 2 <= lmax2:
+            keep[i] = False; rep[i] = a
+    return _compact(p, np.array(keep), np.array(newpar, np.int64))
+
+# %% ../nbs/08a_lsystem.ipynb #a61060d3
 def simplify(p, par, h: float, spur: float = 1.5, smooth: int = 3, alpha: float = 0.5, angle: float = 25.0,
              max_len: float = 4.0):
     ("(nodes, parents) of the tree (`p`, `par`) with spurs under `spur` voxels (edge `h`) pruned, unbranched runs "
      "smoothed and nearly collinear internodes merged.")
     p = np.asarray(p, np.float64).copy(); par = np.asarray(par, np.int64).copy()
     if h <= 0: raise TreebookError(f"the voxel edge h must be > 0, got {h}")
-    def compact(keep, newpar):
-        new = np.cumsum(keep) - 1
-        q = newpar[keep]; q = np.where(q >= 0, new[np.maximum(q, 0)], -1)
-        return p[keep], q
+    if spur > 0 and len(p) > 2: p, par = _prune_spurs(p, par, spur * h)
     m = len(p)
-    if spur > 0 and m > 2:
-        nch = np.bincount(par[1:], minlength=m).tolist(); pl = par.tolist()
-        seg = [0.0] + np.linalg.norm(p[1:] - p[par[1:]], axis=1).tolist()
-        acc = [0.0] * m                                   # length of the unbranched run ending at each node
-        for i in range(1, m):
-            a = pl[i]; acc[i] = seg[i] + (acc[a] if a != 0 and nch[a] == 1 else 0.0)
-        keep = np.ones(m, bool)
-        for leaf in [i for i in range(1, m) if nch[i] == 0 and acc[i] < spur * h]:
-            run, i = [leaf], pl[leaf]
-            while i != 0 and nch[i] == 1: run.append(i); i = pl[i]
-            if nch[i] >= 2: keep[run] = False              # a spur off a fork; a bare chain is left alone
-        if not keep.all(): p, par = compact(keep, par); m = len(p)
     nch = np.bincount(par[1:], minlength=m)
     child = np.full(m, -1); child[par[1:]] = np.arange(1, m)
     inner = np.flatnonzero(nch == 1); inner = inner[inner != 0]
     for _ in range(smooth):
         p[inner] += alpha * ((p[par[inner]] + p[child[inner]]) / 2 - p[inner])
     if angle > 0 and len(inner):
-        cmax, lmax2 = np.cos(np.radians(angle)), (max_len * h) ** 2
-        P = p.tolist(); pl = par.tolist(); cl = child.tolist(); one = (nch == 1).tolist()
-        keep = [True] * m; rep = list(range(m)); newpar = list(pl)
-        for i in range(1, m):
-            a = rep[pl[i]]; newpar[i] = a
-            if not one[i]: continue
-            c = cl[i]; x, y, z = P[i]; ax, ay, az = P[a]; cx, cy, cz = P[c]
-            u = (x - ax, y - ay, z - az); v = (cx - x, cy - y, cz - z)
-            uu, vv = u[0] ** 2 + u[1] ** 2 + u[2] ** 2, v[0] ** 2 + v[1] ** 2 + v[2] ** 2
-            uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-            if uv > cmax * (uu * vv) ** 0.5 and (cx - ax) ** 2 + (cy - ay) ** 2 + (cz - az) ** 2 <= lmax2:
-                keep[i] = False; rep[i] = a
-        p, par = compact(np.array(keep), np.array(newpar, np.int64))
+        p, par = _merge_straight(p, par, child, nch == 1, np.cos(np.radians(angle)), (max_len * h) ** 2)
     return p, par
 
 # %% ../nbs/08a_lsystem.ipynb #3f6eb8f8
@@ -359,38 +373,27 @@ def _rule_index(g: Grammar):
                                                      * g.rule_level]))
     return g.__dict__["_kd"]
 
-# %% ../nbs/08a_lsystem.ipynb #fd8a23c2
-def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
-    ("(nodes (m, 3), node parents (m,)) of the tree one level finer: one stochastic production applied to every branch "
-     "of `tree` (at `level`).")
-    rng = np.random.default_rng(seed)
-    h = g.voxel(level)
-    p, par = tree_nodes(tree)
-    s, e = p[par[1:]], p[1:]
-    d = e - s; ln = np.linalg.norm(d, axis=1)
-    d = np.where(ln[:, None] > 1e-9, d, [0.0, 0.0, 1.0])
-    R = frames(d); H = R[:, :, 0]; bp = tree.parent
-    rel = np.where(bp >= 0, (H * H[np.maximum(bp, 0)]).sum(1), 1.0)
+# %% ../nbs/08a_lsystem.ipynb #7da67c8b
+def _pick_rules(g: Grammar, H, ln, rel, h: float, level: int, k: int, rng) -> np.ndarray:
+    """The rule of each vector (headings `H`, lengths `ln`, straightness `rel`, voxel edge `h`): one of the `k` nearest
+    keys of the rule space, drawn with weights 1 / (distance + 0.05)."""
     q = np.column_stack([H, np.log(np.maximum(ln / h, 1e-3)), 0.5 * rel,
                          np.full(len(ln), 0.25 * min(level, g.finest - 1))])
     kk = min(k, g.n_rules)
     dist, cand = _rule_index(g).query(q, k=kk)
     dist, cand = dist.reshape(len(q), kk), cand.reshape(len(q), kk)
     wts = 1.0 / (dist + 0.05); wts /= wts.sum(1, keepdims=True)
-    pick = cand[np.arange(len(q)), (rng.random(len(q))[:, None] > np.cumsum(wts, 1)).sum(1).clip(0, kk - 1)]
-    n = np.where(ln > 1e-9, g.ptr[pick + 1] - g.ptr[pick], 0)
-    own = np.repeat(np.arange(len(q)), n)
-    first = np.cumsum(n) - n
-    rows = np.repeat(g.ptr[pick], n) + np.arange(n.sum()) - np.repeat(first, n)
-    sc = np.clip(ln / h / np.maximum(g.length[pick], 1e-6), 0.5, 2.0)[own, None] * h
-    vw = np.einsum("mij,mj->mi", R[own], g.vector[rows]) * sc          # child vectors in the world
-    ow = s[own] + np.einsum("mij,mj->mi", R[own], g.offset[rows]) * sc  # where entry children want to start
-    lo = np.minimum(s, e) - h / 2; hi = np.maximum(s, e) + h / 2
-    link = g.link[rows]
-    P = np.empty((len(rows) + 1, 3)); P[0] = p[0]; out_par = [-1]; m = 1
-    node_of = np.zeros(len(rows), np.int64)         # derived node at the end of each child (or where it attached)
-    made = [None] * len(q)                          # derived nodes of each branch (inherited when a branch made none)
-    for b in range(len(q)):
+    return cand[np.arange(len(q)), (rng.random(len(q))[:, None] > np.cumsum(wts, 1)).sum(1).clip(0, kk - 1)]
+
+# %% ../nbs/08a_lsystem.ipynb #ec8e6d0a
+def _attach(root, bp, first, n, link, vw, ow, lo, hi, s, H, ln):
+    """(nodes, parents) of the derived level: the children `vw` of each vector b (rows `first[b]` to `first[b] + n[b]`)
+    attached to their linked sibling or, entry children, to the derived node nearest `ow`, clipped to the vector's box
+    (`lo`, `hi`); a production that falls short of its vector (start `s`, heading `H`, length `ln`) is stretched."""
+    P = np.empty((len(link) + 1, 3)); P[0] = root; out_par = [-1]; m = 1
+    node_of = np.zeros(len(link), np.int64)         # derived node at the end of each child (or where it attached)
+    made = [None] * len(bp)                         # derived nodes of each branch (inherited when a branch made none)
+    for b in range(len(bp)):
         pb = bp[b]; base = made[pb] if pb >= 0 else [0]
         mine = []
         for r in range(first[b], first[b] + n[b]):
@@ -407,6 +410,29 @@ def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
             if 1e-9 < tmax < ln[b]: P[ix] += np.outer(tp * (min(ln[b] / tmax, 1.5) - 1), H[b])
         made[b] = mine if mine else base
     return P[:m], np.array(out_par, np.int64)
+
+# %% ../nbs/08a_lsystem.ipynb #af2568d1
+def derive(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4):
+    ("(nodes (m, 3), node parents (m,)) of the tree one level finer: one stochastic production applied to every branch "
+     "of `tree` (at `level`).")
+    rng = np.random.default_rng(seed)
+    h = g.voxel(level)
+    p, par = tree_nodes(tree)
+    s, e = p[par[1:]], p[1:]
+    d = e - s; ln = np.linalg.norm(d, axis=1)
+    d = np.where(ln[:, None] > 1e-9, d, [0.0, 0.0, 1.0])
+    R = frames(d); H = R[:, :, 0]; bp = tree.parent
+    rel = np.where(bp >= 0, (H * H[np.maximum(bp, 0)]).sum(1), 1.0)
+    pick = _pick_rules(g, H, ln, rel, h, level, k, rng)
+    n = np.where(ln > 1e-9, g.ptr[pick + 1] - g.ptr[pick], 0)
+    own = np.repeat(np.arange(len(ln)), n)
+    first = np.cumsum(n) - n
+    rows = np.repeat(g.ptr[pick], n) + np.arange(n.sum()) - np.repeat(first, n)
+    sc = np.clip(ln / h / np.maximum(g.length[pick], 1e-6), 0.5, 2.0)[own, None] * h
+    vw = np.einsum("mij,mj->mi", R[own], g.vector[rows]) * sc          # child vectors in the world
+    ow = s[own] + np.einsum("mij,mj->mi", R[own], g.offset[rows]) * sc  # where entry children want to start
+    lo = np.minimum(s, e) - h / 2; hi = np.maximum(s, e) + h / 2
+    return _attach(p[0], bp, first, n, g.link[rows], vw, ow, lo, hi, s, H, ln)
 
 # %% ../nbs/08a_lsystem.ipynb #b92cb31a
 def grow(g: Grammar, tree: Tree, level: int, seed=0, k: int = 4) -> Tree:
