@@ -87,7 +87,57 @@ def _prepare_out(out) -> Path:
         raise TreebookError(f"cannot write to the folder {out}: choose a folder you may write to")
     return out
 
-# %% ../nbs/02b_datasets.ipynb #9f78778c
+# %% ../nbs/02b_datasets.ipynb #3e9087c5
+_LIMITS = (("n", 1, 10_000_000), ("max_branches", 2, 100_000), ("stages", 1, 1000), ("workers", 1, 256),
+           ("shard_size", 1, 100_000), ("n_points", 1, 10_000_000))   # (argument, smallest, largest)
+
+def _check_counts(test_fraction: float, **counts):
+    "Raise unless each count of `_LIMITS` is a whole number in its range and `test_fraction` is in [0, 1)."
+    for name, lo, hi in _LIMITS:
+        v = counts[name]
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+            raise TreebookError(f"{name} must be a whole number in {lo}..{hi:,}, got {v!r}")
+    if not 0 <= test_fraction < 1: raise TreebookError(f"test_fraction must be in [0, 1), got {test_fraction!r}")
+
+# %% ../nbs/02b_datasets.ipynb #7a056464
+def _check_resume(mpath: Path, config: dict):
+    "Raise if the manifest `mpath` exists but is no JSON, or records a dataset made with another `config`."
+    if not mpath.exists(): return
+    try:
+        old = json.loads(mpath.read_text())
+    except ValueError:
+        raise TreebookError(f"{mpath} is not valid JSON: delete it (and the shards) or use another folder") from None
+    if old.get("config") != config:
+        diff = sorted(k for k in config if old.get("config", {}).get(k) != config[k])
+        raise TreebookError(f"{mpath.parent} holds a dataset made with other parameters ({', '.join(diff)}): use "
+                            f"another folder, or the same parameters to resume")
+
+# %% ../nbs/02b_datasets.ipynb #8eb5c768
+def _shard_jobs(out: Path, sp, seeds: list, split: list, shard_size: int, **opts) -> tuple:
+    """(jobs for the shards still to make, {shard: its record} of those already on disk); `opts` go into every job
+    (stages, max_branches, scans, images, trees, n_points)."""
+    jobs, done = [], {}
+    for k, a in enumerate(range(0, len(seeds), shard_size)):
+        idx = list(range(a, min(a + shard_size, len(seeds))))
+        path = out / f"shard_{k:05d}.npz"
+        if path.exists(): done[k] = _check_shard(path, idx); continue
+        jobs.append(dict(path=str(path), index=idx, seeds=[seeds[i] for i in idx], split=[split[i] for i in idx],
+                         params=sp.to_dict(), **opts, tree_dir=str(out / "trees"), key=k))
+    return jobs, done
+
+# %% ../nbs/02b_datasets.ipynb #07e5fcf8
+def _run_shards(jobs: list, done: dict, workers: int, bar):
+    "Make the shards of `jobs` (in `workers` processes if more than one), recording each in `done`."
+    if workers == 1 or len(jobs) <= 1:
+        for j in jobs: done[j["key"]] = _make_shard(j); bar.update(len(j["index"]))
+        return
+    import multiprocessing as mp
+    with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork")) as ex:
+        futs = {ex.submit(_make_shard, j): j for j in jobs}
+        for f in as_completed(futs):
+            j = futs[f]; done[j["key"]] = f.result(); bar.update(len(j["index"]))
+
+# %% ../nbs/02b_datasets.ipynb #22dbd5df
 def generate_dataset(species, n: int, out, max_branches: int | None = None, stages: int = 1, scans: bool = False,
                      images: bool = False, trees: bool = False, workers: int = 2, seed: int = 0, shard_size: int = 100,
                      test_fraction: float = 0.1, n_points: int = 16384, progress: bool = True) -> dict:
@@ -95,77 +145,27 @@ def generate_dataset(species, n: int, out, max_branches: int | None = None, stag
     sp = _species(species)
     check_species(sp)
     cap = sp.max_branches if max_branches is None else max_branches
-    for name, v, lo, hi in (
-        ("n", n, 1, 10_000_000),
-        ("max_branches", cap, 2, 100_000),
-        ("stages", stages, 1, 1000),
-        ("workers", workers, 1, 256),
-        ("shard_size", shard_size, 1, 100_000),
-        ("n_points", n_points, 1, 10_000_000),
-    ):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
-            raise TreebookError(f"{name} must be a whole number in {lo}..{hi:,}, got {v!r}")
-    if not 0 <= test_fraction < 1: raise TreebookError(f"test_fraction must be in [0, 1), got {test_fraction!r}")
+    _check_counts(test_fraction, n=n, max_branches=cap, stages=stages, workers=workers, shard_size=shard_size,
+                  n_points=n_points)
     out = _prepare_out(out)
-    config = {
-        "species": sp.name,
-        "params": sp.to_dict(),
-        "n": int(n),
-        "max_branches": int(cap),
-        "stages": int(stages),
-        "scans": bool(scans),
-        "images": bool(images),
-        "trees": bool(trees),
-        "seed": int(seed),
-        "shard_size": int(shard_size),
-        "test_fraction": float(test_fraction),
-        "n_points": int(n_points) if scans else None,
-        "image_size": IMAGE_SIZE if images else None,
-    }
+    config = {"species": sp.name, "params": sp.to_dict(), "n": int(n), "max_branches": int(cap), "stages": int(stages),
+              "scans": bool(scans), "images": bool(images), "trees": bool(trees), "seed": int(seed),
+              "shard_size": int(shard_size), "test_fraction": float(test_fraction),
+              "n_points": int(n_points) if scans else None, "image_size": IMAGE_SIZE if images else None}
     mpath = out / "manifest.json"
-    if mpath.exists():
-        try:
-            old = json.loads(mpath.read_text())
-        except ValueError:
-            raise TreebookError(
-                f"{mpath} is not valid JSON: delete it (and the shards) or use another folder"
-            ) from None
-        if old.get("config") != config:
-            diff = sorted(k for k in config if old.get("config", {}).get(k) != config[k])
-            raise TreebookError(
-                f"{out} holds a dataset made with other parameters ({', '.join(diff)}): use another folder, or the "
-                                f"same parameters to resume"
-            )
+    _check_resume(mpath, config)
     for p in out.glob(".*.part"): p.unlink()  # leftovers of an interrupted write
     seeds = [tree_seed(seed, i) for i in range(n)]
     split = [int(is_test(s, test_fraction)) for s in seeds]
     if trees: (out / "trees").mkdir(exist_ok=True)
-    jobs, done = [], {}
-    for k, a in enumerate(range(0, n, shard_size)):
-        idx = list(range(a, min(a + shard_size, n)))
-        path = out / f"shard_{k:05d}.npz"
-        if path.exists(): done[k] = _check_shard(path, idx); continue
-        jobs.append(dict(path=str(path), index=idx, seeds=[seeds[i] for i in idx], split=[split[i] for i in idx],
-                         params=sp.to_dict(), stages=stages, max_branches=cap, scans=scans, images=images, trees=trees,
-                         tree_dir=str(out / "trees"), n_points=n_points, key=k))
+    jobs, done = _shard_jobs(out, sp, seeds, split, shard_size, stages=stages, max_branches=cap, scans=scans,
+                             images=images, trees=trees, n_points=n_points)
     manifest = {"format": "treebook.dataset", "format_version": DATASET_FORMAT, "config": config, "complete": False}
     _atomic_write(mpath, lambda f: f.write(json.dumps(manifest, indent=1).encode()))
     from tqdm.auto import tqdm
-    bar = tqdm(
-        total=n,
-        initial=sum(d["trees"] for d in done.values()),
-        desc=f"{sp.name} trees",
-        unit="tree",
-        disable=not progress,
-    )
-    if workers == 1 or len(jobs) <= 1:
-        for j in jobs: done[j["key"]] = _make_shard(j); bar.update(len(j["index"]))
-    else:
-        import multiprocessing as mp
-        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork")) as ex:
-            futs = {ex.submit(_make_shard, j): j for j in jobs}
-            for f in as_completed(futs):
-                j = futs[f]; done[j["key"]] = f.result(); bar.update(len(j["index"]))
+    bar = tqdm(total=n, initial=sum(d["trees"] for d in done.values()), desc=f"{sp.name} trees", unit="tree",
+               disable=not progress)
+    _run_shards(jobs, done, workers, bar)
     bar.close()
     shards = [done[k] for k in sorted(done)]
     manifest.update(complete=True, shards=shards, seeds=seeds,
