@@ -65,22 +65,9 @@ def _forks(tree: Tree):
     f = np.flatnonzero(kids >= 2)
     return tree.end[f, :3].astype(np.float64), np.maximum(3 * tree.end[f, 3], 0.01 * tree.size)
 
-# %% ../nbs/02a_scan.ipynb #8a0ab534
-def scan(
-    tree: Tree,
-    n_points: int = 16384,
-    views: int = 3,
-    noise: float = 0.002,
-    outliers: float = 0.01,
-    missing: int = 0,
-    missing_radius: float = 0.08,
-    leaves: bool = False,
-    sides: int = 8,
-    seed: int = 0,
-    mesh=None,
-) -> Scan:
-    """Scan `tree` by ray casting its mesh from `views` positions: `n_points` labelled points with noise, outliers and
-    missing regions."""
+# %% ../nbs/02a_scan.ipynb #71a83cef
+def _check_scan_args(tree, n_points, views, noise, outliers, missing, missing_radius):
+    "Raise a `TreebookError` for an empty tree or a count or share of `scan` out of its range."
     if not isinstance(tree, Tree) or not tree.n: raise TreebookError("scan needs a non-empty Tree")
     if not isinstance(n_points, (int, np.integer)) or not 1 <= n_points <= 10_000_000:
         raise TreebookError(f"n_points must be a whole number in 1..10,000,000, got {n_points!r}")
@@ -90,6 +77,45 @@ def scan(
         if not np.isfinite(v) or not 0 <= v <= hi: raise TreebookError(f"{name} must be between 0 and {hi}, got {v!r}")
     if not isinstance(missing, (int, np.integer)) or not 0 <= missing <= 100:
         raise TreebookError(f"missing must be a whole number of regions in 0..100, got {missing!r}")
+
+# %% ../nbs/02a_scan.ipynb #11961020
+def _surface_hits(mesh, vps, n_in: int, missing: int, radius: float, rng) -> tuple:
+    """(points, faces) seen from the viewpoints `vps`: rays to random surface points, first hits kept, then those
+    within `radius` of `missing` random hit points dropped; cast again until at least `n_in` survive (8 tries)."""
+    holes = None
+    pts, face = np.zeros((0, 3)), np.zeros(0, np.int64)
+    for attempt in range(8):  # cast until enough points survive the missing regions (almost always once)
+        k = int(2 * (n_in - len(pts)) / (0.5 ** attempt) + 256)
+        targets, _ = trimesh.sample.sample_surface(mesh, k, seed=int(rng.integers(2**31)))
+        hit, p, f = _cast(mesh, vps[rng.integers(len(vps), size=k)], np.asarray(targets, np.float64))
+        if holes is None and missing:
+            holes = p[rng.choice(len(p), missing)] if len(p) else np.zeros((0, 3))
+        if holes is not None and len(holes):
+            keep = cKDTree(holes).query(p)[0] > radius
+            p, f = p[keep], f[keep]
+        pts, face = np.concatenate([pts, p]), np.concatenate([face, f])
+        if len(pts) >= n_in: break
+    if not len(pts):
+        raise TreebookError("the scanner saw nothing of this tree (is it degenerate, or all removed as missing?)")
+    return pts, face
+
+# %% ../nbs/02a_scan.ipynb #eb8602e7
+def _junction_mask(tree: Tree, points, outlier) -> np.ndarray:
+    "Which `points` (outliers never) lie within a fork's radius of one of the tree's forks."
+    junction = np.zeros(len(points), bool)
+    fp, fr = _forks(tree)
+    if len(fp):
+        d, j = cKDTree(fp).query(points)
+        junction = (d <= fr[j]) & ~outlier
+    return junction
+
+# %% ../nbs/02a_scan.ipynb #84ab54ec
+def scan(tree: Tree, n_points: int = 16384, views: int = 3, noise: float = 0.002, outliers: float = 0.01,
+         missing: int = 0, missing_radius: float = 0.08, leaves: bool = False, sides: int = 8, seed: int = 0,
+         mesh=None) -> Scan:
+    """Scan `tree` by ray casting its mesh from `views` positions: `n_points` labelled points with noise, outliers and
+    missing regions."""
+    _check_scan_args(tree, n_points, views, noise, outliers, missing, missing_radius)
     rng = np.random.default_rng(seed)
     mesh = mesh if mesh is not None else tree_mesh(tree, sides=sides, leaves=leaves, seed=seed)
     fb = np.asarray(mesh.metadata["face_branch"])
@@ -97,21 +123,7 @@ def scan(
     size = max(tree.size, 1e-12)
     vps = _viewpoints(tree, views, rng)
     n_out = int(round(outliers * n_points)); n_in = n_points - n_out
-    holes = None
-    pts, face = np.zeros((0, 3)), np.zeros(0, np.int64)
-    for attempt in range(8):  # cast until enough points survive the missing regions (almost always once)
-        k = int(2 * (n_in - len(pts)) / (0.5 ** attempt) + 256)
-        targets, _ = trimesh.sample.sample_surface(mesh, k, seed=int(rng.integers(2**31)))
-        hit, p, f = _cast(mesh, vps[rng.integers(views, size=k)], np.asarray(targets, np.float64))
-        if holes is None and missing:
-            holes = p[rng.choice(len(p), missing)] if len(p) else np.zeros((0, 3))
-        if holes is not None and len(holes):
-            keep = cKDTree(holes).query(p)[0] > missing_radius * size
-            p, f = p[keep], f[keep]
-        pts, face = np.concatenate([pts, p]), np.concatenate([face, f])
-        if len(pts) >= n_in: break
-    if not len(pts):
-        raise TreebookError("the scanner saw nothing of this tree (is it degenerate, or all removed as missing?)")
+    pts, face = _surface_hits(mesh, vps, n_in, missing, missing_radius * size, rng)
     pick = rng.choice(len(pts), n_in, replace=len(pts) < n_in)
     pts, face = pts[pick], face[pick]
     pts = pts + rng.normal(0, noise * size, pts.shape)
@@ -121,20 +133,10 @@ def scan(
     foliage = np.concatenate([fl[face], np.zeros(n_out, bool)])
     outlier = np.concatenate([np.zeros(n_in, bool), np.ones(n_out, bool)])
     points = np.concatenate([pts, out])
-    junction = np.zeros(n_points, bool)
-    fp, fr = _forks(tree)
-    if len(fp):
-        d, j = cKDTree(fp).query(points)
-        junction = (d <= fr[j]) & ~outlier
+    junction = _junction_mask(tree, points, outlier)
     order = rng.permutation(n_points)
-    return Scan(
-        points[order].astype(np.float32),
-        branch[order],
-        junction[order],
-        foliage[order],
-        outlier[order],
-        vps.astype(np.float32),
-    )
+    return Scan(points[order].astype(np.float32), branch[order], junction[order], foliage[order], outlier[order],
+                vps.astype(np.float32))
 
 # %% ../nbs/02a_scan.ipynb #1d656920
 WINDOW = (-0.8, 0.8, -0.3, 1.3)  # x min, x max, z min, z max of the fixed front camera, canonical units
