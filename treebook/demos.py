@@ -44,7 +44,7 @@ def demo_reconstruct(out_dir, seed: int = 0, method: str | None = None) -> list:
     from treebook.partnet import WEIGHTS
     from treebook.tree import _atomic_write
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
-    method = method or ("partnet" if WEIGHTS.exists() else "classic")
+    method = method or "paths"   # the default of reconstruct
     pts = read_points(SHIPPED_SCAN)
     tree = reconstruct(pts, method=method, seed=seed)
     mesh = tree_mesh(tree, sides=12)
@@ -70,7 +70,7 @@ def demo_trees(out_dir, seed: int = 0, method: str | None = None) -> list:
     from treebook.partnet import WEIGHTS
     from treebook.tree import _atomic_write
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
-    method = method or ("partnet" if WEIGHTS.exists() else "classic")
+    method = method or "paths"   # the default of reconstruct
     pts = read_points(SHIPPED_SCAN)
     c = pts.mean(0)
     both = np.vstack([pts, (pts - c) * [-1, -1, 1] + c + [1.2 * np.ptp(pts[:, 0]), 0, 0]])
