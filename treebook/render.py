@@ -109,43 +109,47 @@ def _project(p, view):
     upv = np.cross(d, right)
     return np.stack([p @ right, p @ upv], -1), p @ d
 
-# %% ../nbs/01a_render.ipynb #ec1af539
+# %% ../nbs/01a_render.ipynb #f7036949
+def _draw_points(ax, xyz, rgb, view, point_size):
+    "Points `xyz` with colours `rgb` (0..255), far ones first."
+    xy, z = _project(xyz, view)
+    o = np.argsort(z)
+    ax.scatter(xy[o, 0], xy[o, 1], c=rgb[o] / 255, s=point_size, linewidths=0)
+
+# %% ../nbs/01a_render.ipynb #0a484fc9
+def _draw_tree(ax, tree, view):
+    "A tree as lines with widths from the radii, far ones first."
+    from matplotlib.collections import LineCollection
+    seg = np.stack([tree.start[:, :3], tree.end[:, :3]], 1).astype(float)
+    xy, z = _project(seg.reshape(-1, 3), view)
+    o = np.argsort(z.reshape(-1, 2).mean(1))
+    lw = 1 + 400 * tree.start[:, 3] / max(tree.size, 1e-9)
+    ax.add_collection(LineCollection(xy.reshape(-1, 2, 2)[o], linewidths=lw[o], colors="#694e34", capstyle="round"))
+
+# %% ../nbs/01a_render.ipynb #fe0d00c8
+def _draw_mesh(ax, m, view):
+    "A mesh: triangles sorted far to near, shaded by how much they face the light."
+    from matplotlib.collections import PolyCollection
+    xy, z = _project(np.asarray(m.vertices, float), view)
+    tri = m.faces
+    o = np.argsort(z[tri].mean(1))
+    light = np.asarray(VIEWS[view][0], float); light = light / np.linalg.norm(light)
+    shade = 0.35 + 0.65 * np.abs(m.face_normals @ light)
+    rgb = np.asarray(m.visual.face_colors)[:, :3] / 255 if m.visual.kind == "face" else np.full((len(tri), 3), 0.55)
+    ax.add_collection(PolyCollection(xy[tri][o], facecolors=np.clip(rgb[o] * shade[o, None], 0, 1), edgecolors="none"))
+
+# %% ../nbs/01a_render.ipynb #16b423a4
 def _render_matplotlib(scene, view, size, background, point_size, tree=None):
     import matplotlib
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection, PolyCollection
     dpi = 100
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     ax = fig.add_axes([0, 0, 1, 1]); ax.set_axis_off(); fig.patch.set_facecolor(background)
     for it in scene:
-        if it[0] == "points":
-            xy, z = _project(it[1], view)
-            o = np.argsort(z)
-            ax.scatter(xy[o, 0], xy[o, 1], c=it[2][o] / 255, s=point_size, linewidths=0)
-        elif tree is not None:  # a tree: lines with widths from the radii, far ones first
-            seg = np.stack([tree.start[:, :3], tree.end[:, :3]], 1).astype(float)
-            xy, z = _project(seg.reshape(-1, 3), view)
-            o = np.argsort(z.reshape(-1, 2).mean(1))
-            lw = 1 + 400 * tree.start[:, 3] / max(tree.size, 1e-9)
-            ax.add_collection(
-                LineCollection(xy.reshape(-1, 2, 2)[o], linewidths=lw[o], colors="#694e34", capstyle="round")
-            )
-        else:  # a mesh: triangles sorted far to near, shaded by how much they face the light
-            m = it[1]
-            xy, z = _project(np.asarray(m.vertices, float), view)
-            tri = m.faces
-            o = np.argsort(z[tri].mean(1))
-            light = np.asarray(VIEWS[view][0], float); light = light / np.linalg.norm(light)
-            shade = 0.35 + 0.65 * np.abs(m.face_normals @ light)
-            rgb = (
-                np.asarray(m.visual.face_colors)[:, :3] / 255
-                if m.visual.kind == "face"
-                else np.full((len(tri), 3), 0.55)
-            )
-            ax.add_collection(
-                PolyCollection(xy[tri][o], facecolors=np.clip(rgb[o] * shade[o, None], 0, 1), edgecolors="none")
-            )
+        if it[0] == "points": _draw_points(ax, it[1], it[2], view, point_size)
+        elif tree is not None: _draw_tree(ax, tree, view)
+        else: _draw_mesh(ax, it[1], view)
     lo, hi = _bounds(scene)
     corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
     xy, _ = _project(corners, view)
