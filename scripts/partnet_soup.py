@@ -3,7 +3,7 @@
 Usage: python scripts/partnet_soup.py OUT.pt RUN1.pt RUN2.pt [...]
 
 Each RUN is a file that treebook.partnet.save_partnet wrote (train_partnet.py's --out) or a checkpoint of train_partnet.py
-(its --work's checkpoint.pt, or one that scripts/gpu_partnet.sh returned). They must share one config, up to the
+(its --work's checkpoint.pt, or one that scripts/gpu.sh partnet returned). They must share one config, up to the
 merging threshold, linkage and test-time turns, which are taken from the first: score the soup with
 train_partnet.py --init OUT.pt --steps 0, which chooses them again on the training scans. OUT's meta names the runs it averages.
 """
