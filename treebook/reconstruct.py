@@ -470,6 +470,20 @@ def hop_tree(g, root: int, power: float = 2.0) -> tuple:
     return dijkstra(tree, indices=root), pred
 
 # %% ../nbs/09b_reconstruct.ipynb #e6e6c891
+def _pieces(m: int, a, b) -> np.ndarray:
+    """Connected piece (m,) of each of `m` vertices joined by edges `a`-`b`, numbered in the order of their lowest
+    vertex (as scipy's `connected_components`); a few edges by union-find, many by scipy, whose call costs more."""
+    if len(a) > 64:
+        return connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(m, m)), directed=False)[1]
+    up = list(range(m))
+    def root(x):
+        while up[x] != x: up[x] = up[up[x]]; x = up[x]
+        return x
+    for x, y in zip(np.asarray(a).tolist(), np.asarray(b).tolist()):
+        x, y = root(x), root(y)
+        if x != y: up[max(x, y)] = min(x, y)
+    return np.unique([root(x) for x in range(m)], return_inverse=True)[1].ravel()
+
 def entry_nodes(b, geo, pred, g) -> np.ndarray:
     """Node (n,) of each point of the neighbour graph `g`, given its geodesic bin `b`, distance `geo` and shortest-path
     predecessor `pred` from the root: the pieces of a bin that the graph joins, but only between points that entered
@@ -493,8 +507,7 @@ def entry_nodes(b, geo, pred, g) -> np.ndarray:
         rr, cc = r[a0:a1], c[a0:a1]
         ok = entry[rr] == entry[cc]
         loc[pts] = np.arange(len(pts))
-        lab = connected_components(coo_matrix((np.ones(ok.sum()), (loc[rr[ok]], loc[cc[ok]])), shape=(len(pts),) * 2),
-                                   directed=False)[1]
+        lab = _pieces(len(pts), loc[rr[ok]], loc[cc[ok]])
         node[pts] = nxt + lab
         nxt += lab.max() + 1
     return node
