@@ -469,7 +469,7 @@ def hop_tree(g, root: int, power: float = 2.0) -> tuple:
     tree = coo_matrix((w + 1e-12, (pred[i], i)), shape=g.shape)
     return dijkstra(tree, indices=root), pred
 
-# %% ../nbs/09b_reconstruct.ipynb #e6e6c891
+# %% ../nbs/09b_reconstruct.ipynb #39b92374
 def _pieces(m: int, a, b) -> np.ndarray:
     """Connected piece (m,) of each of `m` vertices joined by edges `a`-`b`, numbered in the order of their lowest
     vertex (as scipy's `connected_components`); a few edges by union-find, many by scipy, whose call costs more."""
@@ -484,6 +484,7 @@ def _pieces(m: int, a, b) -> np.ndarray:
         if x != y: up[max(x, y)] = min(x, y)
     return np.unique([root(x) for x in range(m)], return_inverse=True)[1].ravel()
 
+# %% ../nbs/09b_reconstruct.ipynb #e6e6c891
 def entry_nodes(b, geo, pred, g) -> np.ndarray:
     """Node (n,) of each point of the neighbour graph `g`, given its geodesic bin `b`, distance `geo` and shortest-path
     predecessor `pred` from the root: the pieces of a bin that the graph joins, but only between points that entered
