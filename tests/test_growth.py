@@ -11,8 +11,8 @@ from treebook.botany import grow
 from treebook.tokens import STAGE, Tokenizer
 from treebook.hourglass import ModelConfig, TreeTransformer
 from treebook.train import WEIGHTS
-from treebook.growth import (complete, containment, decode_growth, encode_growth, generate, grow_sequence, write_growth,
-                             demo_growth)
+from treebook.growth import complete, containment, decode_growth, encode_growth, generate, grow_sequence, write_growth
+from treebook.demos import demo_growth
 from treebook.condition import (ConditionalTree, load_conditional, points_to_tree, read_lines, save_conditional, sketch_to_tree,
                                 image_to_tree)
 

@@ -388,9 +388,9 @@ for key, name, target, sub in [
         ("trees", "two trees in one scan: found by their stems and reconstructed one by one",
          "treebook.demos:demo_trees", "trees"),
         ("foliage", "a leafy scan: wood and leaves told apart, the tree reconstructed from the wood",
-         "treebook.foliage:demo_foliage", "foliage"),
+         "treebook.demos:demo_foliage", "foliage"),
         ("sample", "trees sampled from the shipped elm model (HourglassTree)", "treebook.train:demo_sample", "sample"),
-        ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.growth:demo_growth", "growth")]:
+        ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.demos:demo_growth", "growth")]:
     demo_step(key, name)(_lazy_step(target, sub))
 
 # %% ../nbs/11_cli.ipynb #0bf7c2b8

@@ -15,7 +15,7 @@ from .pointio import read_points
 from .reconstruct import SHIPPED_SCAN, _diag, pipe_radii, reconstruct, sample_skeleton
 
 # %% auto #0
-__all__ = ['demo_growth', 'demo_reconstruct', 'demo_trees']
+__all__ = ['demo_growth', 'demo_reconstruct', 'demo_trees', 'demo_foliage']
 
 # %% ../nbs/12_demos.ipynb #8bb7c724
 def demo_growth(out_dir, seed: int = 0) -> list:
@@ -86,3 +86,27 @@ def demo_trees(out_dir, seed: int = 0, method: str | None = None) -> list:
     png = out / "trees.png"
     _atomic_write(png, lambda f: img.save(f, format="PNG"))
     return [Path(p) for p in paths] + [png]
+
+# %% ../nbs/12_demos.ipynb #509c55e7
+def demo_foliage(out_dir, seed: int = 0) -> list:
+    """A leafy procedural tree, its wood found by the shipped network, the tree reconstructed from all points and from
+    the wood: .ply, .npz and a .png; returns the paths."""
+    import trimesh
+    from treebook.foliage import foliage_scan
+    from treebook.reconstruct import wood_mask
+    from treebook.render import render, image_grid
+    from treebook.tree import _atomic_write
+    out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
+    p = foliage_scan("tulip", seed=seed)[0].astype(np.float64)
+    wood = wood_mask(p, True, seed=seed)
+    rgb = np.where(wood[:, None], [105, 78, 52], [60, 140, 60]).astype(np.uint8)
+    ply = out / "leafy_scan.ply"
+    _atomic_write(ply, lambda f: f.write(trimesh.PointCloud(p, colors=rgb).export(file_type="ply")))
+    trees = [reconstruct(p, seed=seed), reconstruct(p, seed=seed, foliage=True)]
+    paths = [ply, trees[0].save(out / "tree_all_points.npz"), trees[1].save(out / "tree_wood.npz")]
+    img = image_grid([render(p, view="front", size=(300, 360), colors=rgb / 255, point_size=2.0)]
+                     + [render(t, view="front", size=(300, 360)) for t in trees],
+                     ncols=3, labels=[f"scan: {wood.mean():.0%} wood", "from all points", "from the wood"])
+    png = out / "foliage.png"
+    _atomic_write(png, lambda f: img.save(f, format="PNG"))
+    return paths + [png]

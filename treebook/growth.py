@@ -28,7 +28,7 @@ __all__ = ['GROWTH_MODES', 'write_trees', 'growth_order', 'encode_growth', 'deco
            'wrap_embed', 'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss',
            'grown_histories', 'extend_context', 'grow_sequence', 'stage_picture', 'write_growth', 'complete',
            'tree_picture', 'write_tree_set', 'branches_per_stage', 'stage_mix', 'growth_scores', 'evaluate_growth',
-           'growth_card', 'completion_check', 'demo_growth']
+           'growth_card', 'completion_check']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -586,9 +586,3 @@ def completion_check(partial: Tree, completions, tok: Tokenizer, order: str = "d
     same = lambda a, b: a.n == b.n and np.array_equal(a.end, b.end)
     distinct = all(not same(a, b) for i, a in enumerate(completions) for b in completions[:i])
     return {"prompt_kept_exactly": bool(kept), "pairwise_distinct": bool(distinct)}
-
-# %% ../nbs/10_growth_and_conditioning.ipynb #5b1d55c0
-def demo_growth(out_dir, seed: int = 0) -> list:
-    "`demos.demo_growth`, under its old name (the CLI loads it from here)."
-    from treebook.demos import demo_growth as demo
-    return demo(out_dir, seed)
