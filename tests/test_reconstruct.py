@@ -83,13 +83,14 @@ def test_million_points(tree_scan):
     assert (lab >= 0).mean() > 0.95
 
 
-@pytest.mark.parametrize("name", ["tree13.xyz", "tree7.xyz"])
-def test_real_scans(shared_scans, name):
+@pytest.mark.parametrize("name, method", [("tree13.xyz", "classic"), ("tree7.xyz", "classic"), ("tree1.xyz", "paths"),
+                                          ("tree13.xyz", "paths")])
+def test_real_scans(shared_scans, name, method):
     path = shared_scans / name
     if not path.exists(): pytest.skip(f"{path} not present")
     from treebook.pointio import read_points
     p = read_points(path)
-    t = reconstruct(path, method="classic")
+    t = reconstruct(path, method=method)   # tree1's lowest node is one point: the root still starts under it
     one_tree(t)
     lo, hi = t.bounds()
     assert (lo >= p.min(0) - 0.5).all() and (hi <= p.max(0) + 0.5).all()  # the scan's frame and units

@@ -640,7 +640,9 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
     start, end, parent, seg_end = [], [], [], {}
     for i, p in enumerate(kept):
         if p is None: continue
-        if attach[i] is None: prev, ps = np.array([cen[p[0], 0], cen[p[0], 1], q[:, 2].min()]), -1
+        if attach[i] is None:   # the root: from the ground under the first node, never at its very centre
+            prev, ps = np.array([cen[p[0], 0], cen[p[0], 1], q[:, 2].min()]), -1
+            if np.linalg.norm(cen[p[0]] - prev) <= 1e-9 * (1 + np.abs(prev).max()): prev[2] -= 0.01 * spacing
         else: prev, ps = cen[attach[i]], seg_end[attach[i]]
         last = -np.inf
         for j, v in enumerate(p):
