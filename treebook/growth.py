@@ -28,7 +28,7 @@ __all__ = ['GROWTH_MODES', 'write_trees', 'growth_order', 'encode_growth', 'deco
            'wrap_embed', 'condition_prefix', 'generate', 'on_device', 'fit', 'growth_batch', 'lm_loss',
            'grown_histories', 'extend_context', 'grow_sequence', 'stage_picture', 'write_growth', 'complete',
            'tree_picture', 'write_tree_set', 'branches_per_stage', 'stage_mix', 'growth_scores', 'evaluate_growth',
-           'growth_card', 'completion_check']
+           'growth_card', 'completion_check', 'growth_run', 'full_layout_run', 'completion_figure']
 
 # %% ../nbs/10_growth_and_conditioning.ipynb #036806fd
 GROWTH_MODES = ("incremental", "full")
@@ -586,3 +586,86 @@ def completion_check(partial: Tree, completions, tok: Tokenizer, order: str = "d
     same = lambda a, b: a.n == b.n and np.array_equal(a.end, b.end)
     distinct = all(not same(a, b) for i, a in enumerate(completions) for b in completions[:i])
     return {"prompt_kept_exactly": bool(kept), "pairwise_distinct": bool(distinct)}
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #14988b72
+def growth_run(out, data, init=None, trees: int = 2000, steps: int = 300, batch: int = 8, lr: float = 1e-3,
+               warmup: int = 20, val: int = 32, samples: int = 16, seed: int = 0, dim: int = 64, depth: int = 5,
+               heads: int = 4, time_limit: float | None = None, train: bool = True, stages: int = 10) -> tuple:
+    """(model, tokenizer, run, held-out histories) of the growth run in `out`, trained first unless `train` is False;
+    `run` describes it (step, seconds, size, data, settings) for `evaluate_growth`'s record."""
+    from treebook.datasets import load_manifest
+    from treebook.train import load_pretrained
+    out = Path(out); out.mkdir(parents=True, exist_ok=True)
+    m = load_manifest(data)
+    seeds = lambda split, k: [m["seeds"][i] for i in m["splits"][split][:k]]
+    hist = grown_histories(seeds("train", trees), cache=out / "train_histories.npz")
+    held = grown_histories(seeds("test", max(val, samples)), cache=out / "test_histories.npz")
+    max_len = 8 * (200 + stages - 1 + 2)                   # 200 branches, nine [STAGE] blocks, [SOS] and [EOS]
+    if init: net, tok = load_pretrained(init); net = extend_context(net, max_len)
+    else:
+        tok = Tokenizer.fit(hist); torch.manual_seed(seed)
+        net = TreeTransformer(ModelConfig(arch="full", dim=dim, depth=depth, heads=heads, max_len=max_len))
+    tok.save(out / "tokenizer.json")
+    meta = {"init": init, "trees": len(hist), "batch": batch, "lr": lr, "seed": seed, "warmup": warmup,
+            "val_histories": val, "samples": samples}
+    m0 = torch.load(init, weights_only=True).get("meta", {}) if str(init or "").endswith(".pt") else None
+    if m0 is not None: meta["init_meta"] = {k: m0[k] for k in m0 if k in ("step", "val_loss")}
+    if train:
+        print(json.dumps(fit(net, lambda k: growth_batch(hist, tok, k, batch, seed, stages), lm_loss, out, steps=steps,
+                             lr=lr, warmup=warmup, ckpt_every=5, log_every=5, time_limit=time_limit, meta=meta)))
+    ck = torch.load(out / "last.pt", weights_only=True); net.load_state_dict(ck["model"]); net.eval()
+    run = {"step": ck["step"], "steps_planned": steps, "seconds": ck["seconds"], "n_params": net.n_params, **meta,
+           "config": vars(net.config)}
+    return net, tok, run, held
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #b1c7cd57
+def full_layout_run(out, branches: int = 30, trees: int = 2000, steps: int = 500, batch: int = 8, lr: float = 2e-3,
+                    dim: int = 64, depth: int = 5, heads: int = 4, samples: int = 32, seed: int = 0,
+                    time_limit: float | None = None) -> dict:
+    """The record of a full-layout run in `out` (resumable): the run, the containment of samples, procedural histories
+    and unrelated stages, the sampled branches per stage, and the seconds of sampling."""
+    from treebook.botany import grow_stages
+    Path(out).mkdir(parents=True, exist_ok=True)
+    hist = [grow_stages("elm", seed=s, max_branches=branches) for s in range(trees)]
+    held = [grow_stages("elm", seed=10 ** 6 + s, max_branches=branches) for s in range(samples)]
+    finals = [h[-1] for h in hist]
+    tok = Tokenizer.fit(finals)
+    L = max(len(encode_growth(tok, h, mode="full")) for h in hist + held)
+    torch.manual_seed(seed)
+    net = TreeTransformer(ModelConfig(arch="full", dim=dim, depth=depth, heads=heads, max_len=L + 64))
+    # growth_batch encodes a final tree with `stage`; the full layout rebuilds the stage trees with botany.stage_tree
+    r = fit(net, lambda k: growth_batch(finals, tok, k, batch, seed, 10, mode="full"), lm_loss, out, steps=steps,
+            lr=lr, warmup=20, ckpt_every=10, time_limit=time_limit)
+    print(json.dumps(r), flush=True)
+    t0 = time.time()
+    seqs = generate(net, samples, tok=tok, stages=10, mode="full", temperature=0.9, top_p=0.95, seed=seed)
+    sc = growth_scores([decode_growth(tok, s, mode="full") for s in seqs], tok, held)
+    run = {"n_params": net.n_params, "max_len": net.config.max_len, "trees": trees, "max_branches": branches}
+    return {"run": r | run,
+            "containment": {"samples": sc["containment"],
+                            "procedural": float(np.mean([containment(h, tok) for h in held])),
+                            "unrelated_stages": float(np.mean([containment(h, tok) for h in stage_mix(held)]))},
+            "branches_per_stage": sc["branches_per_stage"], "seconds_sampling": time.time() - t0}
+
+# %% ../nbs/10_growth_and_conditioning.ipynb #d207375b
+def completion_figure(model="elm", n: int = 4, seed: int = 0, cut: float = 0.25, trees: int = 3,
+                      max_branches: int | None = None) -> tuple:
+    "(rows, PIL picture) of `n` completions of `trees` held-out elms cut to the first `cut` of their branches."
+    import tempfile
+    from PIL import Image
+    from treebook.botany import grow_stages
+    from treebook.train import load_pretrained
+    tok = model[1] if isinstance(model, tuple) else load_pretrained(model)[1]
+    rows, pics = [], []
+    with tempfile.TemporaryDirectory() as d:
+        for k in range(trees):
+            full = grow_stages("elm", seed=10 ** 6 + k, max_branches=max_branches)[-1]   # far from the dataset's seeds
+            part = full.prefix(max(1, int(cut * full.n)), "dfs")
+            out = complete(part, n=n, seed=seed + k, model=model)
+            rows.append({"tree_seed": 10 ** 6 + k, "full_branches": full.n, "given": part.n,
+                         "completed_branches": [t.n for t in out], **completion_check(part, out, tok)})
+            write_tree_set(out, Path(d) / str(k), "completion", meshes=False, first=part)
+            pics.append(Image.open(Path(d) / str(k) / "completion.png").convert("RGB"))
+    fig, y = Image.new("RGB", (max(i.width for i in pics), sum(i.height for i in pics)), "white"), 0
+    for i in pics: fig.paste(i, (0, y)); y += i.height
+    return rows, fig
