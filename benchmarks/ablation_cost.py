@@ -1,12 +1,12 @@
 """Table 2's cost columns on a shared machine: time of one training step (forward + backward + AdamW) and peak memory
-of each architecture, at the ablation's size and at the shipped model's. Usage: python scripts/ablation_cost.py
+of each architecture, at the ablation's size and at the shipped model's. Usage: python benchmarks/ablation_cost.py
 [--repeats 3] [--threads 1]. Timing is round-robin over the architectures (each repeat times every one once), so that
 load from other jobs falls on all alike; the median is reported. Memory: each architecture in a fresh process, peak
 resident set (VmHWM, reset just before) during two steps minus the resident set before the first.
 Writes results/ablation_cost.json (command, commit, machine)."""
 import argparse, json, os, subprocess, sys, time
 from pathlib import Path
-import provenance   # scripts/provenance.py, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts")); import provenance   # scripts/provenance.py
 import numpy as np, torch
 from treebook.hourglass import ARCHS, ModelConfig, TreeTransformer
 
@@ -52,7 +52,7 @@ def main():
         for arch in ARCHS: rows[arch]["time_vs_pt"] = rows[arch]["step_s_median"] / pt["step_s_median"]; rows[arch]["memory_vs_pt"] = rows[arch]["peak_mb"] / pt["peak_mb"]
         out["sizes"][size] = rows
         print(size, json.dumps({k: (round(v["step_s_median"], 3), round(v["peak_mb"])) for k, v in rows.items()}), flush=True)
-    provenance.record("scripts/ablation_cost.py", out, "results/ablation_cost.json", threads=a.threads, load_average=load,
+    provenance.record("benchmarks/ablation_cost.py", out, "results/ablation_cost.json", threads=a.threads, load_average=load,
                       note="2 CPU cores shared with other jobs; round-robin timing spreads their load over all architectures")
 
 if __name__ == "__main__":
