@@ -1,9 +1,10 @@
 """The one results file chapter 09b reads, results/reconstruction.json: `python benchmarks/reconstruct_results.py`.
 
 Takes from the benchmark records what the chapter shows: speed, real scans and skeletons of results/reconstruct.json,
-the AdTree table of results/reconstruct_peer.json, results/reconstruct_trees.json (find_trees) and
-results/reconstruct_voxel.json (VOXEL). Each part keeps the command, commit and machine of the run that made it. Run it
-again whenever one of those records changes; with --at REV the records are read as they were at that commit."""
+the AdTree table of results/reconstruct_peer.json, results/reconstruct_trees.json (find_trees),
+results/reconstruct_voxel.json (VOXEL) and results/reconstruct_speed.json (whole processes). Each part keeps the
+command, commit and machine of the run that made it. Run it again whenever one of those records changes; with --at REV
+the records are read as they were at that commit."""
 import argparse, json, subprocess, sys
 from pathlib import Path
 
@@ -37,7 +38,7 @@ table = {c: {m: {k: S[f"{c}/{m}"][k] for k in COLS if k in S[f"{c}/{m}"]} for m 
          for c in CONDS if f"{c}/adtree" in S}
 ahead = [c for c, t in table.items() if "f1_tight" in t.get("paths", {}) and "f1_tight" in t["adtree"]
          and t["paths"]["f1_tight"] >= t["adtree"]["f1_tight"]]
-T, V = read("reconstruct_trees.json"), read("reconstruct_voxel.json")
+T, V, W = read("reconstruct_trees.json"), read("reconstruct_voxel.json"), read("reconstruct_speed.json")
 cell = lambda x: {k: x[k] for k in ("chamfer", "coverage")}
 out = dict(command="python benchmarks/reconstruct_results.py" + (f" --at {at}" if at else ""), commit=at or commit(),
            speed=dict(B["speed"], source=part("speed")),
@@ -45,6 +46,8 @@ out = dict(command="python benchmarks/reconstruct_results.py" + (f" --at {at}" i
            skeletons=dict(summary=B["skeletons"]["summary"], source=part("skeletons")),
            peer=dict(columns=COLS, table=table, paths_f1_at_least_adtree=ahead,
                      source=dict(source(P), record="results/reconstruct_peer.json")),
+           process=dict(W["seconds"], load_at_start=W["load_at_start"], import_floor=W["import_floor"],
+                        source=dict(source(W), record="results/reconstruct_speed.json")),
            trees=dict(summary=T["summary"], source=dict(source(T, "minutes"), record="results/reconstruct_trees.json")),
            voxel=dict({k: V[k] for k in ("trees", "kinds", "fractions", "mean_chamfer", "chosen")},
                       table={k: cell(v) for k, v in V["table"].items()},

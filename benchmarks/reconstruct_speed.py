@@ -4,8 +4,8 @@ Usage: python benchmarks/reconstruct_speed.py [--work tmp/peer] [--conditions sp
 
 For each condition: AdTree (`adtree SCAN OUT`) and `treebook reconstruct SCAN --out T.npz --mesh T.obj` as one process per
 scan, and `treebook reconstruct SCAN... --out DIR --mesh obj` as one process for all the condition's scans (the start-up
-paid once), its time divided by the number of scans. Wall-clock seconds; the load average at the start is recorded, since
-other jobs on the machine slow every column alike.
+paid once), its time divided by the number of scans; and the time a process takes to import numpy and scipy, the
+floor under any one-scan run. Wall-clock seconds; the load average at the start is recorded.
 """
 import argparse, json, os, subprocess, sys, tempfile, time
 from pathlib import Path
@@ -34,6 +34,8 @@ def main():
     ap.add_argument("--out", default="")
     a = ap.parse_args()
     res, load = {}, os.getloadavg()[0]
+    floor = float(np.median([wall([sys.executable, "-c", "import numpy, scipy.sparse.csgraph, scipy.spatial"])
+                             for _ in range(5)]))   # what any process that uses numpy and scipy pays first
     for c in a.conditions.split(","):
         scans = sorted(Path(a.work, "scans").glob(f"{c}_*[0-9].xyz"))
         if not scans: raise SystemExit(f"no scans of {c} in {a.work}/scans: run benchmarks/peer.py first")
@@ -46,7 +48,8 @@ def main():
                       adtree=round(float(np.mean(ad)), 3), treebook=round(float(np.mean(one)), 3),
                       treebook_batch=round(batch, 3))
         print(c, res[c], flush=True)
-    if a.out: provenance.record("benchmarks/reconstruct_speed.py", dict(load_at_start=round(load, 2), seconds=res), a.out)
+    if a.out: provenance.record("benchmarks/reconstruct_speed.py", dict(load_at_start=round(load, 2),
+                                                                     import_floor=round(floor, 3), seconds=res), a.out)
 
 
 if __name__ == "__main__":
