@@ -383,7 +383,7 @@ for key, name, target, sub in [
         ("species", "a gallery of the procedural species (botany)", "treebook.botany:demo_gallery", ""),
         ("grammar", "a wavelet grammar inferred from a shipped real scan, and three propagated trees",
          "treebook.wavelet:demo_grammar", "grammar"),
-        ("reconstruct", "a real scan reconstructed into a tree (TreePartNet)", "treebook.demos:demo_reconstruct",
+        ("reconstruct", "a real scan reconstructed into a tree (paths through the points)", "treebook.demos:demo_reconstruct",
          "reconstruct"),
         ("trees", "two trees in one scan: found by their stems and reconstructed one by one",
          "treebook.demos:demo_trees", "trees"),
