@@ -8,11 +8,11 @@
 #   NAME: the last part of --out), NAME.log.csv, its record results/conditions_..._TAG.json, and log.txt. Evaluate with
 #   `train_conditions.py ... --eval-only` and the same --out. Makes data/elm when it is missing (the dataset's seed).
 # Usage: scripts/gpu.sh partnet POOLS OUTDIR "ARGS" ["ARGS" ...]
-#   POOLS: the train pool as scripts/pool_pack.py packs it (several, comma-separated, make one pool). ARGS:
-#   scripts/train_partnet.py's arguments for one run, with --work and --minutes, without --device or --train-only
+#   POOLS: the train pool as scripts/partnet.py pool-pack packs it (several, comma-separated, make one pool). ARGS:
+#   scripts/partnet.py train's arguments for one run, with --work and --minutes, without --device or --train-only
 #   (a machine that cannot scan: no open3d). Each --work receives the unpacked pool; OUTDIR receives NAME.pt (NAME: the
 #   last part of --work), the run's checkpoint, and NAME.log. To evaluate, put NAME.pt in its --work as checkpoint.pt
-#   and run train_partnet.py with the same ARGS, --device cuda, without --train-only: it scores on the CPU.
+#   and run partnet.py train with the same ARGS, --device cuda, without --train-only: it scores on the CPU.
 # Set TREEBOOK_COMMIT to the commit being run (the copy of the tree there may carry a stale git history).
 # DEVICE=cpu tries the script on a machine without one.
 set -uo pipefail
@@ -26,9 +26,9 @@ run_all() {   # every job at once, each with the arguments "$1 JOB" prints; outp
   for p in "${pids[@]}"; do wait "$p" || rc=1; done
 }
 if [ "$kind" = partnet ]; then
-  script=train_partnet.py; log_of() { echo "$dest/$(basename "$(flag --work "$1")").log"; }
+  script="partnet.py train"; log_of() { echo "$dest/$(basename "$(flag --work "$1")").log"; }
   for job in "${jobs[@]}"; do w=$(flag --work "$job"); [ -n "$w" ] || { echo "no --work in: $job" >&2; exit 2; }
-    python scripts/pool_pack.py unpack "$arg" "$w" || exit 1; : > "$(log_of "$job")"; done
+    python scripts/partnet.py pool-pack unpack "$arg" "$w" || exit 1; : > "$(log_of "$job")"; done
   train_args() { echo "--device $dev --train-only"; }; run_all train_args log_of
   for job in "${jobs[@]}"; do w=$(flag --work "$job"); n=$(basename "$w")
     python -c "import torch; b = torch.load('$w/checkpoint.pt', map_location='cpu', weights_only=False)

@@ -1,4 +1,4 @@
-"""scripts/partnet_soup.py: the mean of runs' weights, saved as weights that load; runs of different networks refused."""
+"""scripts/partnet.py soup: the mean of runs' weights, saved as weights that load; runs of different networks refused."""
 import subprocess, sys
 from pathlib import Path
 import torch
@@ -8,7 +8,7 @@ from treebook.partnet import PartNetConfig, TreePartNet, load_partnet, save_part
 
 
 def soup(*args):
-    return subprocess.run([sys.executable, str(ROOT / "scripts" / "partnet_soup.py"), *map(str, args)], capture_output=True, text=True, timeout=300)
+    return subprocess.run([sys.executable, str(ROOT / "scripts" / "partnet.py"), "soup", *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
 def test_soup_is_the_mean(tmp_path):
@@ -21,7 +21,7 @@ def test_soup_is_the_mean(tmp_path):
     got, a, b = (load_partnet(p).state_dict() for p in (tmp_path / "soup.pt", *runs))
     assert all(torch.allclose(got[k], (a[k] + b[k]) / 2) for k in got)
     assert any(not torch.equal(a[k], b[k]) for k in a)    # two different runs, so the mean is neither
-    ck = tmp_path / "checkpoint.pt"                          # a train_partnet.py checkpoint is read as well
+    ck = tmp_path / "checkpoint.pt"                          # a partnet.py train checkpoint is read as well
     torch.save(dict(model=b, config=load_partnet(runs[1]).cfg.to_dict(), opt={}, step=3), ck)
     r = soup(tmp_path / "soup2.pt", runs[0], ck)
     assert r.returncode == 0, r.stderr[-2000:]

@@ -1,21 +1,19 @@
-"""scripts/pool_pack.py: a further train pool made with its own tree seeds, packed, and unpacked together with another
-into one pool that train_partnet.py loads, each scan's points and labels as they were scanned (to 16-bit steps of its box)."""
+"""scripts/partnet.py pool-pack (treebook.partnet_runs): a further train pool made with its own tree seeds, packed, and unpacked together with another
+into one pool that partnet.py train loads, each scan's points and labels as they were scanned (to 16-bit steps of its box)."""
 import subprocess, sys
 from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "scripts"))
-import pool_pack
-from train_partnet import load_or_make_pool, make_pool
+from treebook.partnet_runs import load_or_make_pool, make_packed_pool, make_pool, unpack_pools
 from treebook.botany import SPECIES
 
 
 def test_make_and_unpack_several(tmp_path):
-    pool_pack.make(2, 1, tmp_path / "a" / "s2.npz", n_points=256)     # the parent folder is made
-    pool_pack.make(3, 1, tmp_path / "s3.npz", n_points=256)
-    pool_pack.unpack(f"{tmp_path / 'a' / 's2.npz'},{tmp_path / 's3.npz'}", tmp_path / "work")
+    make_packed_pool(2, 1, tmp_path / "a" / "s2.npz", n_points=256)     # the parent folder is made
+    make_packed_pool(3, 1, tmp_path / "s3.npz", n_points=256)
+    unpack_pools(f"{tmp_path / 'a' / 's2.npz'},{tmp_path / 's3.npz'}", tmp_path / "work")
     got = load_or_make_pool(tmp_path / "work" / "train_pool.npz")
     assert len(got) == 2 * len(SPECIES) and all(len(g["points"]) == 256 for g in got)
     assert load_or_make_pool(tmp_path / "work" / "test_pool.npz") == []   # none packed: an empty one
@@ -30,5 +28,5 @@ def test_make_and_unpack_several(tmp_path):
 
 
 def test_usage():
-    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "pool_pack.py"), "make", "2", "1"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "partnet.py"), "pool-pack", "make", "2", "1"], capture_output=True, text=True)
     assert r.returncode != 0 and "Usage" in r.stderr

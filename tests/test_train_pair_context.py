@@ -1,4 +1,4 @@
-"""scripts/train_pair_context.py: it gives weights a pair context and leaves the network as it was, scores every test set with and
+"""scripts/partnet.py pair-context: it gives weights a pair context and leaves the network as it was, scores every test set with and
 without it from one run of the network, replaces a pair context the weights already hold, and stops on a bad flag."""
 import json, subprocess, sys
 from pathlib import Path
@@ -10,7 +10,7 @@ TINY = ["--per-species", "2", "--fit-scans", "6", "--tests", "999:1", "--epochs"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, str(ROOT / "scripts" / "train_pair_context.py"), *args], capture_output=True, text=True, timeout=600)
+    return subprocess.run([sys.executable, str(ROOT / "scripts" / "partnet.py"), "pair-context", *args], capture_output=True, text=True, timeout=600)
 
 
 @pytest.fixture(scope="module")

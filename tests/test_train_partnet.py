@@ -1,4 +1,4 @@
-"""scripts/train_partnet.py: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
+"""scripts/partnet.py train: --patch-term with --freeze-init trains the patch term alone; their misuse stops with a clear message;
 an evaluation of --init weights (--steps 0) leaves no checkpoint behind to shadow the next one; --test-seed and the
 scores per scan that an evaluation records; --init weights with a pair context start a run without it."""
 import json, shutil, subprocess, sys
@@ -12,7 +12,7 @@ SMALL = ["--points", "512", "--pool-points", "512", "--width", "8", "--batch", "
 
 
 def run(*args):
-    return subprocess.run([sys.executable, str(ROOT / "scripts" / "train_partnet.py"), *args], capture_output=True, text=True, timeout=600)
+    return subprocess.run([sys.executable, str(ROOT / "scripts" / "partnet.py"), "train", *args], capture_output=True, text=True, timeout=600)
 
 
 def pools_in(work, name):
@@ -89,7 +89,7 @@ def test_evaluation_records_each_scan(base):
 
 
 def test_init_leaves_a_pair_context_out(base):
-    "Weights with a pair context (scripts/train_pair_context.py) can start a run: the context fits the old network, so it is dropped."
+    "Weights with a pair context (scripts/partnet.py pair-context) can start a run: the context fits the old network, so it is dropped."
     work, init = base
     blob = torch.load(init, weights_only=False)
     cfg = dict(blob["config"], pair_context=True)

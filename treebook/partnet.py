@@ -364,7 +364,7 @@ def load_partnet(path=None) -> TreePartNet:
     "A `TreePartNet` with the weights at `path` (default: the shipped weights), in eval mode."
     path = Path(path) if path is not None else WEIGHTS
     if not path.exists():
-        raise TreebookError(f"no TreePartNet weights at {path}: train them with scripts/train_partnet.py, or use "
+        raise TreebookError(f"no TreePartNet weights at {path}: train them with scripts/partnet.py train, or use "
                             "method='classic'")
     try:
         # a version string saved as torch's own type
