@@ -5,14 +5,25 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.treebook-installed
 FLAGS ?=
 
-.PHONY: install demo test test-slow readme book export clean lint
+.PHONY: install demo test test-slow readme book export clean lint elm
 
 $(PY):
 	python3 -m venv $(VENV)
 
+# The system library open3d's wheel needs (libusb-1.0), installed by apt-get only when missing; a warning if it cannot be.
+define SYSTEM_DEPS
+ldconfig -p 2>/dev/null | grep -q 'libusb-1.0.so.0' && exit 0; \
+echo "installing system packages: libusb-1.0-0"; \
+command -v apt-get >/dev/null || { echo "warning: no apt-get; install libusb-1.0-0 with your package manager (open3d needs it)" >&2; exit 0; }; \
+sudo=""; [ "$$(id -u)" -ne 0 ] && sudo="sudo"; \
+$$sudo apt-get install -y -q libusb-1.0-0 >/dev/null 2>&1 \
+  || { $$sudo apt-get update -q >/dev/null 2>&1 && $$sudo apt-get install -y -q libusb-1.0-0 >/dev/null; } \
+  || echo "warning: could not install libusb-1.0-0; open3d will not import" >&2; exit 0
+endef
+
 # torch==2.13.0 first: it is the CPU build on local disk; the package's own torch range then adds nothing.
 $(STAMP): settings.ini setup.py | $(PY)
-	@bash scripts/system_deps.sh
+	@$(SYSTEM_DEPS)
 	$(PY) -m pip install -q torch==2.13.0
 	$(PY) -m pip install -q -e ".[dev]"
 	@touch $(STAMP)
@@ -47,6 +58,17 @@ book: install
 export: install
 	$(VENV)/bin/nbdev_clean
 	$(VENV)/bin/nbdev_export
+
+# The shipped `elm` model (resumable: run again after a kill, each training call stops after 100 minutes): 10,000
+# procedural elms (<= 200 branches; 9,000 train / 1,000 test by the dataset's split), DFS / Full training (dim 128,
+# 8 layers, 4 heads, batch 16, 4,000 steps), then the card's evaluation of best.pt and the copy into the package.
+RUN ?= runs/elm2
+elm:
+	$(PY) -c "from treebook.datasets import generate_dataset; generate_dataset('elm', 10000, 'data/elm', max_branches=200, workers=2, seed=0)"
+	$(PY) -m treebook.train --data data/elm --out $(RUN) --order dfs --arch full --dim 128 --depth 8 --heads 4 \
+	    --batch-size 16 --steps 4000 --lr 2e-3 --warmup 100 --val-every 500 --val-trees 128 --ckpt-every 50 \
+	    --time-limit 6000 --threads 2 --seed 0 --quiet $$([ -f $(RUN)/last.pt ] && echo --resume)
+	$(PY) scripts/ship_elm.py --run $(RUN) --data data/elm --temperature 1.0 --top-p 1.0
 
 clean:
 	rm -rf build dist *.egg-info treebook-demo _proc

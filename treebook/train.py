@@ -412,7 +412,7 @@ steps then cosine to a tenth, batch {ar['batch_size']} x {ar['world']} process(e
 {ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}; {run['last_step']} steps{stopped} \
 ({epochs:.2f} epochs) in {(run['train_seconds'] or 0) / 60:.0f} minutes on 2 shared CPU cores. Shipped weights: step \
 {run['best_step']} (lowest validation loss on 128 held-out trees).
-- **Command**: `bash scripts/train_elm.sh` (resumable), which ends with `{res['command']}`.
+- **Command**: `make elm` (resumable), which ends with `{res['command']}`.
 - **Commit** of the evaluation: {res['commit']}; full figures in `results/elm_eval.json`.
 
 ## Scores on the held-out elms
