@@ -1,4 +1,4 @@
-"""TreePartNet's runs (chapter 09a), one subcommand each, their logic in chapter 09a1 (treebook.partnet_runs).
+"""TreePartNet's runs (chapters 09a, 09c), one subcommand each, their logic in chapter 09a1 (treebook.partnet_runs).
   train         train TreePartNet (resumable), evaluate it, write the weights, card, results/partnet_train*.json
   errors        where the affinity goes wrong on the held-out scans: results/partnet_errors.json
   pair-context  give trained weights a pair context, score it on new trees: results/partnet_context.json
@@ -7,6 +7,7 @@
   ablation      the merging ablation (paper Table 1), four trained networks: results/partnet_ablation.json
   results       the one file chapter 09a reads, from the runs' records: results/partnet.json [--at REV]
   pool-pack     pack|unpack|make scan pools, to train on a machine that cannot scan
+  foliage       the wood/leaf network of chapter 09c: weights, card, results/foliage.json
 Usage: python scripts/partnet.py SUBCOMMAND [ARGS]   (the flags of one: python scripts/partnet.py SUBCOMMAND -h)"""
 import sys
 from pathlib import Path
@@ -17,7 +18,8 @@ from treebook.tree import TreebookError
 from treebook import partnet_runs as runs
 
 MAIN = {"train": runs.train_main, "errors": runs.errors_main, "pair-context": runs.pair_context_main,
-        "seed-cut": runs.seed_cut_main, "ablation": runs.ablation_main, "results": runs.results_main}
+        "seed-cut": runs.seed_cut_main, "ablation": runs.ablation_main, "results": runs.results_main,
+        "foliage": runs.foliage_main}
 SOUP_USAGE = "Usage: python scripts/partnet.py soup OUT.pt RUN1.pt RUN2.pt [...]"
 
 if len(sys.argv) < 2 or sys.argv[1] not in (*MAIN, "soup", "pool-pack"): sys.exit(__doc__)

@@ -1,15 +1,15 @@
-"scripts/train_foliage.py end to end, tiny: weights, card and record; bad flags stop it before any work."
+"scripts/partnet.py foliage end to end, tiny: weights, card and record; bad flags stop it before any work."
 import json, subprocess, sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-SCRIPT = ROOT / "scripts" / "train_foliage.py"
+SCRIPT = ROOT / "scripts" / "partnet.py"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True, text=True, cwd=ROOT)
+    return subprocess.run([sys.executable, str(SCRIPT), "foliage", *args], capture_output=True, text=True, cwd=ROOT)
 
 
 def test_tiny_run(tmp_path):

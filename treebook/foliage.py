@@ -181,7 +181,7 @@ def save_foliage(model: FoliageNet, path, **meta) -> Path:
 def load_foliage(path=None) -> FoliageNet:
     "The `FoliageNet` at `path` (default: the shipped weights), in eval mode."
     path = Path(path) if path is not None else WEIGHTS
-    if not path.exists(): raise TreebookError(f"no foliage weights at {path}: train them with scripts/train_foliage.py")
+    if not path.exists(): raise TreebookError(f"no foliage weights at {path}: train them with scripts/partnet.py foliage")
     try: blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:
         raise TreebookError(f"cannot read foliage weights {path} ({type(e).__name__}: {e})") from None

@@ -35,7 +35,8 @@ __all__ = ['GRID', 'SIZES', 'ABLATION', 'RECORDS', 'POOL_PACK_USAGE', 'scan_job'
            'save_checkpoint', 'train_steps', 'partnet_card', 'evaluate_and_ship', 'train_main', 'majority',
            'error_analysis', 'pair_features', 'refined_f1', 'errors_main', 'fingerprint', 'cached_outputs', 'tests_arg',
            'pair_context_parser', 'score_test_sets', 'pair_context_main', 'CutNet', 'seed_cut_main', 'load_run', 'soup',
-           'ablation_main', 'partnet_results', 'results_main', 'pool_pack_main']
+           'ablation_main', 'partnet_results', 'results_main', 'pool_pack_main', 'foliage_parser', 'foliage_skeletons',
+           'foliage_main']
 
 # %% ../nbs/09a1_partnet_runs.ipynb #cfc7499f
 def scan_job(job):
@@ -857,3 +858,78 @@ def pool_pack_main(argv):
     if argv[0] == "pack": pack_pools(argv[1], argv[2], argv[3:] or ("train", "test"))
     elif argv[0] == "make": make_packed_pool(int(argv[1]), int(argv[2]), argv[3])
     else: unpack_pools(argv[1], argv[2])
+
+# %% ../nbs/09a1_partnet_runs.ipynb #311f24b8
+def foliage_parser(root) -> argparse.ArgumentParser:
+    "The flags of `scripts/partnet.py foliage`: the wood/leaf network of chapter 09c, trained, shipped and measured."
+    p = argparse.ArgumentParser(prog="partnet.py foliage", description="Train and ship the wood/leaf PointNet++ "
+                                "(chapter 09c) on leafy procedural scans, and measure what it does for reconstruction.")
+    for k, v in dict(per_species=40, test_per_species=5, steps=3000, batch=2, width=32, threads=2).items():
+        p.add_argument(f"--{k.replace('_', '-')}", type=int, default=v)
+    p.add_argument("--minutes", type=float, default=40.0, help="stop early after this long (--steps set the schedule)")
+    p.add_argument("--lr", type=float, default=1e-3); p.add_argument("--work", default=str(Path(root) / "tmp" / "foliage"))
+    p.add_argument("--skeleton-trees", type=int, default=2, help="held-out trees per species for the skeleton table")
+    p.add_argument("--out", default=str(Path(root) / "treebook" / "data" / "weights" / "foliage.pt"))
+    p.add_argument("--results", default=str(Path(root) / "results" / "foliage.json"))
+    return p
+
+
+# %% ../nbs/09a1_partnet_runs.ipynb #ab12aefc
+def foliage_skeletons(test, per_species: int, trees: int, weights) -> tuple:
+    """(rows, summary): for `trees` held-out trees a species (the first of each species' `per_species` in `test`), the
+    skeleton of the leafy scan as it is, with the geometric filter, with the network's wood (`weights`), and of the
+    tree scanned without leaves, each by classic and partnet against the tree (Chamfer and Hausdorff, in %)."""
+    from treebook.foliage import FOLIAGE_POINTS
+    from treebook.reconstruct import reconstruct, skeleton_distance
+    rows = []
+    for s in tqdm(SPECIES, desc="skeletons"):
+        for i in range(trees):
+            truth = grow(s, seed=29000 + i, stages=1)[-1]
+            leafy = test[list(SPECIES).index(s) * per_species + i][0].astype(np.float64)
+            bare = scan(truth, n_points=FOLIAGE_POINTS, seed=29000 + i).points.astype(np.float64)
+            for kind, cloud, fol in (("leafy", leafy, False), ("geometric filter", leafy, "geometric"),
+                                     ("network", leafy, "network"), ("no leaves", bare, False)):
+                for m in ("classic", "partnet"):
+                    tree, info = reconstruct(cloud, method=m, seed=0, foliage=fol, foliage_weights=weights,
+                                             return_info=True)
+                    d = skeleton_distance(tree, truth)
+                    rows.append(dict(species=s, seed=29000 + i, cloud=kind, method=m, points=len(info["points"]),
+                                     chamfer=round(d["chamfer"], 4), hausdorff=round(d["hausdorff"], 3)))
+    mean = lambda k, m, x: round(float(np.mean([r[x] for r in rows if r["cloud"] == k and r["method"] == m])), 4)
+    summary = {f"{k}/{m}": {x: mean(k, m, x) for x in ("chamfer", "hausdorff", "points")}
+               for k in ("leafy", "geometric filter", "network", "no leaves") for m in ("classic", "partnet")}
+    return rows, (summary if rows else {})
+
+
+# %% ../nbs/09a1_partnet_runs.ipynb #e0567a6a
+def foliage_main(argv, root, command: str, commit):
+    "`scripts/partnet.py foliage [flags]`: train (resumable), score, ship the weights and card, write the record."
+    from treebook.foliage import foliage_card, foliage_pool, save_foliage, train_foliage, wood_scores
+    a = foliage_parser(root).parse_args(argv)
+    for name in ("per_species", "test_per_species", "steps", "batch", "width"):
+        if getattr(a, name) < 1: raise TreebookError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(a, name)}")
+    if not 0 <= a.skeleton_trees <= a.test_per_species:
+        raise TreebookError(f"--skeleton-trees must be in 0..--test-per-species, got {a.skeleton_trees}")
+    torch.set_num_threads(a.threads)
+    work = Path(a.work); work.mkdir(parents=True, exist_ok=True); t0 = time.time()
+    seeds = lambda first, n: [(s, first + i) for s in SPECIES for i in range(n)]
+    train = foliage_pool(work / "pool.npz", seeds(20000, a.per_species), "training scans")
+    test = foliage_pool(work / "test.npz", seeds(29000, a.test_per_species), "held-out scans")
+    t1 = time.time()
+    net, losses = train_foliage(train, steps=a.steps, batch=a.batch, lr=a.lr, width=a.width, seed=0,
+                                checkpoint=work / "checkpoint.pt", minutes=a.minutes)
+    t2 = time.time()
+    scores = wood_scores(net, test); print(json.dumps(scores))
+    meta = dict(command=command, commit=commit(short=True), steps=len(losses), batch=a.batch,
+                minutes=round((t2 - t1) / 60, 1), train_scans=len(train), test_scans=len(test), held_out=scores,
+                machine=f"{platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}")
+    out = save_foliage(net, a.out, **meta)
+    rows, summary = foliage_skeletons(test, a.test_per_species, a.skeleton_trees, out)
+    _atomic_write(Path(a.out).with_suffix(".md"),
+                  lambda f: f.write(foliage_card(net, out, meta, a.per_species, a.lr, a.steps).encode()))
+    res = dict(meta, pool_minutes=round((t1 - t0) / 60, 1), loss_first=float(np.mean(losses[:50])),
+               loss_last=float(np.mean(losses[-50:])), skeletons=summary, rows=rows,
+               parameters=sum(q.numel() for q in net.parameters()))
+    _atomic_write(Path(a.results), lambda f: f.write(json.dumps(res, indent=1).encode()))
+    print(json.dumps(summary, indent=1)); print("wrote", a.out, "and", a.results)
+
