@@ -68,13 +68,14 @@ def neighbour_graph(points, k: int = 10) -> tuple:
 def _diag(p) -> float: return float(np.linalg.norm(p.max(0) - p.min(0)))
 
 # %% ../nbs/09b_reconstruct.ipynb #dd805b3c
-def _ladder(k) -> tuple:
-    ("(owner, fraction) of the points that cut piece i into k[i] equal steps, ends included: `np.linspace` for all at "
-     "once.")
-    k = np.asarray(k, np.int64)
+def _along(s, e, step: float) -> tuple:
+    "(points, segment of each) every at most `step` along the segments from `s` to `e` (m, 3), ends included."
+    k = np.maximum(1, np.ceil(np.linalg.norm(e - s, axis=1) / step)).astype(np.int64)
     own = np.repeat(np.arange(len(k)), k + 1)
     first = np.r_[0, np.cumsum(k + 1)[:-1]]
-    return own, (np.arange(len(own)) - first[own]) / k[own]
+    t = (np.arange(len(own)) - first[own]) / k[own]
+    return s[own] + t[:, None] * (e - s)[own], own
+
 
 # %% ../nbs/09b_reconstruct.ipynb #ff1f04d4
 def _axis_dist(p, a, t):
@@ -247,12 +248,7 @@ def hermite_joins(tree: Tree, max_angle: float = 120.0, pieces: int = 6, return_
 # %% ../nbs/09b_reconstruct.ipynb #4b875db4
 def sample_skeleton(tree: Tree, step: float) -> np.ndarray:
     "Points every `step` along all segments of `tree` (ends included)."
-    s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
-    L = np.linalg.norm(e - s, axis=1)
-    k = np.maximum(1, np.ceil(L / step)).astype(int)
-    rep = np.repeat(np.arange(tree.n), k + 1)
-    t = np.concatenate([np.linspace(0, 1, kk + 1) for kk in k])
-    return s[rep] + t[:, None] * (e - s)[rep]
+    return _along(tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64), step)[0]
 
 # %% ../nbs/09b_reconstruct.ipynb #8429da0e
 def skeleton_distance(tree: Tree, reference: Tree) -> dict:
@@ -551,9 +547,7 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
     start, end, parent = list(start), list(end), list(parent)
     if not start: return start, end, parent
     S, E = np.asarray(start, np.float64), np.asarray(end, np.float64)
-    k = np.maximum(1, np.ceil(np.linalg.norm(E - S, axis=1) / (0.25 * reach)).astype(int))
-    own, t = _ladder(k)
-    done = cKDTree(S[own] + t[:, None] * (E - S)[own]).query(q)[0] <= reach
+    done = cKDTree(_along(S, E, 0.25 * reach)[0]).query(q)[0] <= reach
     far = np.flatnonzero(~done)
     if not len(far): return start, end, parent
     kd = cKDTree(q[far])
@@ -669,10 +663,8 @@ def segment_radii(tree: Tree, points, min_points: int = 3, return_segment: bool 
     q = np.asarray(points, np.float64)
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
     spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1])) if len(q) > 1 else _diag(s)
-    L = np.linalg.norm(e - s, axis=1)
-    k = np.maximum(1, np.ceil(L / max(0.5 * spacing, 1e-12)).astype(int))
-    own, t = _ladder(k)
-    seg = own[cKDTree(s[own] + t[:, None] * (e - s)[own]).query(q)[1]]
+    along, own = _along(s, e, max(0.5 * spacing, 1e-12))
+    seg = own[cKDTree(along).query(q)[1]]
     d = e[seg] - s[seg]
     u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
     dist = np.linalg.norm(q - s[seg] - u[:, None] * d, axis=1)
@@ -774,9 +766,8 @@ def tube_distance(points, trees, k: int = 8, chunk: int = 100_000) -> np.ndarray
     p = p - c
     L = np.linalg.norm(E[:, :3] - S[:, :3], axis=1)
     h = max(float(L.max()) / 50, 1e-3 * _diag(np.r_[S[:, :3], E[:, :3]]), 1e-12)
-    m = np.maximum(1, np.ceil(L / h).astype(int))
-    own, u = _ladder(m)
-    kd = cKDTree(S[own, :3] + u[:, None] * (E - S)[own, :3])
+    along, own = _along(S[:, :3], E[:, :3], h)
+    kd = cKDTree(along)
     out = np.empty(len(p))
     for a in range(0, len(p), chunk):
         q = p[a:a + chunk]
