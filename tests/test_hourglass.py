@@ -207,3 +207,29 @@ def test_one_prompt_per_row(models, arch):
     for s, r in zip(a, rows):
         assert s[:len(r)].tolist() == r.tolist() and token_connectivity(s, FAKE) == 1.0
     assert a[0][18] == 40 and a[1][18] == 80          # each row's third start coordinate follows its own prompt
+
+
+@pytest.mark.parametrize("arch", ["hg1", "hg2", "full"])
+@pytest.mark.parametrize("window", [1, 5, 8, 16])
+def test_window_is_causal_and_cached(arch, window):
+    "A window in the full-resolution layers: future tokens never move earlier logits, and the cache agrees."
+    torch.manual_seed(window)
+    m = TreeTransformer(ModelConfig(arch=arch, window=window, **TINY)).eval()
+    assert check_causal(m, length=37) <= 1e-5
+    for prompt in (0, 3, 20):
+        assert check_cache(m, length=41, prompt=prompt) <= 1e-4
+    kw = dict(tok=FAKE, max_len=53, min_len=53, temperature=0, return_logits=True)
+    (a, la), (b, lb) = sample(m, 2, **kw), sample(m, 2, cache=False, **kw)
+    assert [s.tolist() for s in a] == [s.tolist() for s in b]
+    torch.testing.assert_close(la, lb, atol=1e-4, rtol=1e-4)
+
+
+def test_window_sees_only_the_last_tokens():
+    "With window w, the full-resolution attention at t ignores tokens before t-w+1: changing them moves nothing there."
+    from treebook.hourglass import Attention
+    torch.manual_seed(0)
+    att = Attention(ModelConfig(dim=16, heads=2, depth=8, window=4), window=4).eval()
+    x = torch.randn(1, 30, 16); x2 = x.clone(); x2[:, :10] = torch.randn(1, 10, 16)
+    with torch.no_grad(): y, y2 = att(x), att(x2)
+    torch.testing.assert_close(y[:, 13:], y2[:, 13:])       # positions 13.. see 10.. only
+    assert (y[:, 10:13] - y2[:, 10:13]).abs().max() > 1e-4

@@ -18,8 +18,8 @@ from fastcore.basics import patch
 from .tree import TreebookError, _atomic_write
 
 # %% auto #0
-__all__ = ['ARCHS', 'CHECKPOINT_VERSION', 'PAD_TOKEN', 'ModelConfig', 'KVCache', 'Attention', 'Block', 'shorten', 'lengthen',
-           'TreeTransformer', 'check_causal', 'DecodeState', 'check_cache']
+__all__ = ['ARCHS', 'CHECKPOINT_VERSION', 'PAD_TOKEN', 'ModelConfig', 'KVCache', 'window_attention', 'Attention', 'Block',
+           'shorten', 'lengthen', 'TreeTransformer', 'check_causal', 'DecodeState', 'check_cache']
 
 # %% ../nbs/04_hourglass.ipynb #7ca260fe
 ARCHS = ("pt", "hg1", "hg2", "hg2r", "full")
@@ -38,6 +38,7 @@ class ModelConfig:
     max_len: int = 8216     # longest sequence in tokens (a 1,000-branch tree plus [SOS] and [EOS] groups)
     mlp_ratio: int = 4      # hidden width of the feed-forward layer, in multiples of `dim`
     dropout: float = 0.0
+    window: int = 0         # the full-resolution layers attend to the last `window` tokens only (0: to all)
 
     def __post_init__(self):
         if self.arch not in ARCHS: raise TreebookError(f"unknown arch {self.arch!r}: choose one of {', '.join(ARCHS)}")
@@ -49,6 +50,10 @@ class ModelConfig:
                 f"(one layer down and one up per scale, at least one in the bottleneck); got {self.depth}"
             )
         if self.max_len < 1 or self.vocab_size < 1: raise TreebookError("max_len and vocab_size must be positive")
+        if isinstance(self.window, bool) or not isinstance(self.window, int) or self.window < 0:
+            raise TreebookError(f"window must be a whole number >= 0 (0: no window), got {self.window!r}")
+        if self.window and not self.factors:
+            raise TreebookError(f"window is for the outer layers of an hourglass; arch {self.arch!r} has none")
 
     @property
     def factors(self) -> tuple:
@@ -73,22 +78,43 @@ class KVCache:
         self.v = torch.zeros_like(self.k)
         self.n = 0
 
-    def append(self, k, v):
-        "Store the new keys and values; return all keys, values and the mask for the new queries (None: see all)."
+    def append(self, k, v, window: int = 0):
+        """Store the new keys and values; return the keys and values the new queries may see and their mask (None: see
+        all): every cached position, or with a `window` the last `window` positions of each query."""
         n0, t = self.n, k.shape[2]
         if n0 + t > self.k.shape[2]:
             raise TreebookError(f"the cache holds {self.k.shape[2]} positions; cannot add {t} to {n0}")
         self.k[:, :, n0:n0 + t], self.v[:, :, n0:n0 + t] = k, v
-        self.n = n0 + t
-        mask = None if t == 1 else torch.ones(t, self.n, dtype=torch.bool, device=k.device).tril(diagonal=n0)
-        return self.k[:, :, :self.n], self.v[:, :, :self.n], mask
+        self.n = n1 = n0 + t
+        lo = max(0, n0 - window + 1) if window else 0           # the oldest position a new query sees
+        if t == 1: return self.k[:, :, lo:n1], self.v[:, :, lo:n1], None
+        q, s = torch.arange(n0, n1, device=k.device)[:, None], torch.arange(lo, n1, device=k.device)
+        mask = (s <= q) & (s > q - window) if window else s <= q
+        return self.k[:, :, lo:n1], self.v[:, :, lo:n1], mask
+
+
+# %% ../nbs/04_hourglass.ipynb #45b70048
+def window_attention(q, k, v, window: int, dropout_p: float = 0.0):
+    "Causal attention of `q`, `k`, `v` (B, H, T, D) in which position t sees positions t-window+1 .. t only."
+    B, H, T, D = q.shape
+    W = window
+    if T <= W: return F.scaled_dot_product_attention(q, k, v, is_causal=True, dropout_p=dropout_p)
+    n = -(-T // W)                                                      # chunks, the last one padded
+    q, k, v = (F.pad(x, (0, 0, 0, n * W - T)) for x in (q, k, v))
+    first = F.scaled_dot_product_attention(q[:, :, :W], k[:, :, :W], v[:, :, :W], is_causal=True, dropout_p=dropout_p)
+    chunks = lambda x, a: x[:, :, a:a + (n - 1) * W].reshape(B, H, n - 1, W, D)   # the chunks from position a on
+    k2, v2 = (torch.cat([chunks(x, 0), chunks(x, W)], 3) for x in (k, v))          # chunk c-1, then chunk c
+    i, j = torch.arange(W, device=q.device)[:, None], torch.arange(2 * W, device=q.device)
+    rest = F.scaled_dot_product_attention(chunks(q, W), k2, v2, attn_mask=(j > i) & (j <= i + W), dropout_p=dropout_p)
+    return torch.cat([first, rest.reshape(B, H, (n - 1) * W, D)], 2)[:, :, :T]
+
 
 # %% ../nbs/04_hourglass.ipynb #74101b66
 class Attention(nn.Module):
-    "Causal multi-head self-attention."
-    def __init__(self, c: ModelConfig):
+    "Causal multi-head self-attention; with `window`, each position sees the last `window` positions only."
+    def __init__(self, c: ModelConfig, window: int = 0):
         super().__init__()
-        self.heads, self.dropout = c.heads, c.dropout
+        self.heads, self.dropout, self.window = c.heads, c.dropout, window
         self.qkv = nn.Linear(c.dim, 3 * c.dim, bias=False)
         self.proj = nn.Linear(c.dim, c.dim, bias=False)
 
@@ -96,20 +122,21 @@ class Attention(nn.Module):
         B, T, C = x.shape
         q, k, v = self.qkv(x).view(B, T, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)
         if cache is None:
-            y = F.scaled_dot_product_attention(
-                q, k, v, is_causal=True, dropout_p=self.dropout if self.training else 0.0
-            )
+            p = self.dropout if self.training else 0.0
+            y = (window_attention(q, k, v, self.window, p) if self.window else
+                 F.scaled_dot_product_attention(q, k, v, is_causal=True, dropout_p=p))
         else:
-            k, v, mask = cache.append(k, v)
+            k, v, mask = cache.append(k, v, self.window)
             y = F.scaled_dot_product_attention(q, k, v, attn_mask=mask)
         return self.proj(y.transpose(1, 2).reshape(B, T, C))
 
+
 # %% ../nbs/04_hourglass.ipynb #fda3bb3d
 class Block(nn.Module):
-    "A pre-norm transformer layer: causal self-attention, then a feed-forward network."
-    def __init__(self, c: ModelConfig):
+    "A pre-norm transformer layer: causal self-attention (of the last `window` positions if set), then an MLP."
+    def __init__(self, c: ModelConfig, window: int = 0):
         super().__init__()
-        self.ln1, self.attn = nn.LayerNorm(c.dim), Attention(c)
+        self.ln1, self.attn = nn.LayerNorm(c.dim), Attention(c, window)
         self.ln2 = nn.LayerNorm(c.dim)
         self.mlp = nn.Sequential(nn.Linear(c.dim, c.mlp_ratio * c.dim), nn.GELU(),
                                  nn.Linear(c.mlp_ratio * c.dim, c.dim), nn.Dropout(c.dropout))
@@ -117,6 +144,7 @@ class Block(nn.Module):
     def forward(self, x, cache: KVCache | None = None):
         x = x + self.attn(self.ln1(x), cache)
         return x + self.mlp(self.ln2(x))
+
 
 # %% ../nbs/04_hourglass.ipynb #5dc2e3d8
 def shorten(x, k: int):
@@ -141,9 +169,10 @@ class TreeTransformer(nn.Module):
         self.tok_emb = nn.Embedding(c.vocab_size, c.dim)
         self.slot_emb = nn.Embedding(8, c.dim)
         self.branch_emb = nn.Embedding(-(-c.max_len // 8), c.dim)
-        self.down = nn.ModuleList(Block(c) for _ in c.factors)      # down[i]: one layer at scale i, before shortening
+        outer = lambda i: c.window if i == 0 else 0                # the window, for the full-resolution layers
+        self.down = nn.ModuleList(Block(c, outer(i)) for i in range(len(c.factors)))  # down[i]: scale i, then shorten
         self.mid = nn.ModuleList(Block(c) for _ in range(c.depth - 2 * len(c.factors)))
-        self.up = nn.ModuleList(Block(c) for _ in c.factors)        # up[i]: one layer at scale i, after upsampling
+        self.up = nn.ModuleList(Block(c, outer(i)) for i in range(len(c.factors)))    # up[i]: upsample, then scale i
         half = len(self.mid) // 2 if c.unet != "none" else 0
         alpha = torch.ones(half)
         if c.unet == "learned": self.alpha = nn.Parameter(alpha)
