@@ -37,7 +37,7 @@ def is_test(tree_seed_: int, test_fraction: float) -> bool:
 # %% ../nbs/02b_datasets.ipynb #b988dfc2
 def _make_shard(job: dict) -> dict:
     "Grow, scan and draw the trees of one shard and write it (and per-tree files) atomically; return its counts."
-    from treebook.scan import scan, silhouette, sketch
+    if job["scans"] or job["images"]: from treebook.scan import scan, silhouette, sketch   # trimesh: only for these
     sp = Species(**job["params"])
     trees, out = [], {}
     for i, s in zip(job["index"], job["seeds"]):
