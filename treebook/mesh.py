@@ -5,6 +5,7 @@
 # %% ../nbs/01_mesh.ipynb #3430fba5
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +34,12 @@ def continuation(tree: Tree) -> np.ndarray:
     or -1."""
     d = _unit((tree.end[:, :3] - tree.start[:, :3]).astype(np.float64))
     cont = np.full(tree.n, -1, dtype=np.int64)
-    for i, kids in enumerate(tree.children):
-        if len(kids):
-            align = d[kids] @ d[i]
-            cont[i] = kids[np.lexsort((kids, -align, -tree.start[kids, 3]))[0]]
+    kids = np.flatnonzero(tree.parent >= 0)
+    par = tree.parent[kids]
+    align = (d[kids] * d[par]).sum(1)
+    o = kids[np.lexsort((kids, -align, -tree.start[kids, 3], par))]   # by parent, the best child first
+    first = np.r_[True, tree.parent[o[1:]] != tree.parent[o[:-1]]] if len(o) else np.zeros(0, bool)
+    cont[tree.parent[o[first]]] = o[first]
     return cont
 
 # %% ../nbs/01_mesh.ipynb #c0cc15f7
@@ -62,16 +65,17 @@ def _rings(tree: Tree, min_radius: float):
     tangent[:n][has] = _unit(d[has] + d[cont[has]])
     bad = np.linalg.norm(tangent[:n], axis=1) < 1e-9  # a child turning straight back: use the parent's direction
     tangent[:n][bad] = d[bad]
-    u = np.zeros_like(centre)
-    for i in range(n):  # parents come first: carry each frame on from the ring before it
-        s = start_ring[i]
+    u, tl = [None] * len(centre), tangent.tolist()
+    def carry(prev, t):   # `prev` made perpendicular to `t` (in plain floats: a loop of numpy calls costs more)
+        k = prev[0] * t[0] + prev[1] * t[1] + prev[2] * t[2]
+        v = [prev[0] - k * t[0], prev[1] - k * t[1], prev[2] - k * t[2]]
+        m = math.hypot(*v)
+        return [v[0] / m, v[1] / m, v[2] / m] if m > 1e-6 else _perpendicular(np.array(t)).tolist()
+    for i, s, p in zip(range(n), start_ring.tolist(), par.tolist()):  # parents first: frames carry on from there
         if s >= n:  # a chain head: from the parent's end ring, or any perpendicular for a root
-            prev = u[par[i]] if par[i] >= 0 else _perpendicular(tangent[s])
-            v = prev - (prev @ tangent[s]) * tangent[s]
-            u[s] = _unit(v) if np.linalg.norm(v) > 1e-6 else _perpendicular(tangent[s])
-        v = u[s] - (u[s] @ tangent[i]) * tangent[i]
-        u[i] = _unit(v) if np.linalg.norm(v) > 1e-6 else _perpendicular(tangent[i])
-    return centre, tangent, u, radius, start_ring, np.arange(n)
+            u[s] = carry(u[p] if p >= 0 else _perpendicular(tangent[s]).tolist(), tl[s])
+        u[i] = carry(u[s], tl[i])
+    return centre, tangent, np.array(u, np.float64).reshape(-1, 3), radius, start_ring, np.arange(n)
 
 # %% ../nbs/01_mesh.ipynb #5a5bd9c7
 def _tube_faces(a, b, m):
@@ -163,9 +167,9 @@ def tree_mesh(tree: Tree, sides: int = 10, leaves: bool = False, leaves_per_tip:
 # %% ../nbs/01_mesh.ipynb #d0992c3a
 def _obj_bytes(v, f, rgb) -> bytes:
     "A Wavefront OBJ of vertices `v` (in double precision, eight decimals) coloured `rgb` (0-255) and triangles `f`."
-    rows = np.column_stack([v, np.tile(np.asarray(rgb[:3], np.float64) / 255, (len(v), 1))])
+    colour = " %.8f %.8f %.8f\n" % tuple(np.asarray(rgb[:3], np.float64) / 255)   # the same on every vertex
     faces = np.asarray(f, np.int64) + 1
-    text = ("v %.8f %.8f %.8f %.8f %.8f %.8f\n" * len(rows)) % tuple(rows.ravel().tolist())
+    text = (("v %.8f %.8f %.8f" + colour) * len(v)) % tuple(np.asarray(v, np.float64).ravel().tolist())
     return ("# treebook mesh\n" + text + ("f %d %d %d\n" * len(faces)) % tuple(faces.ravel().tolist())).encode()
 
 

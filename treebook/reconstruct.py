@@ -5,6 +5,7 @@
 # %% ../nbs/09b_reconstruct.ipynb #726724d3
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from pathlib import Path
@@ -30,7 +31,7 @@ def neighbour_graph(points, k: int = 10) -> tuple:
     n = len(points)
     k = min(k, n - 1)
     kd = cKDTree(points)
-    d, j = kd.query(points, k + 1)
+    d, j = kd.query(points, k + 1, workers=-1)   # every core: the same answer, sooner
     d, j = d[:, 1:], j[:, 1:]
     cut = 3 * np.median(d[:, -1])
     ok = d <= cut
@@ -471,6 +472,7 @@ def _pieces(m: int, a, b) -> np.ndarray:
     vertex (as scipy's `connected_components`); a few edges by union-find, many by scipy, whose call costs more."""
     if len(a) > 64:
         return connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(m, m)), directed=False)[1]
+    if not len(a): return np.arange(m)
     up = list(range(m))
     def root(x):
         while up[x] != x: up[x] = up[up[x]]; x = up[x]
@@ -478,7 +480,8 @@ def _pieces(m: int, a, b) -> np.ndarray:
     for x, y in zip(np.asarray(a).tolist(), np.asarray(b).tolist()):
         x, y = root(x), root(y)
         if x != y: up[max(x, y)] = min(x, y)
-    return np.unique([root(x) for x in range(m)], return_inverse=True)[1].ravel()
+    lab = {}   # a piece's root is its lowest vertex, so pieces are numbered as they first appear
+    return np.array([lab.setdefault(root(x), len(lab)) for x in range(m)])
 
 # %% ../nbs/09b_reconstruct.ipynb #e6e6c891
 def entry_nodes(b, geo, pred, g) -> np.ndarray:
@@ -488,6 +491,9 @@ def entry_nodes(b, geo, pred, g) -> np.ndarray:
     n = len(b)
     order = np.argsort(geo, kind="stable")
     node, entry = np.full(n, -1), np.full(n, -1)
+    up = np.where((pred >= 0) & (b[np.maximum(pred, 0)] == b), pred, np.arange(n))
+    while (up[up] != up).any(): up = up[up]   # the first point of its own path into the bin ...
+    src = pred[up]                             # ... and the point below the bin that it came from
     gc = g.tocoo()
     inside = b[gc.row] == b[gc.col]
     r, c = gc.row[inside], gc.col[inside]
@@ -498,9 +504,7 @@ def entry_nodes(b, geo, pred, g) -> np.ndarray:
     loc, nxt = np.full(n, -1), 0
     for bi, s, e, a0, a1 in zip(bins, starts, ends, lo, hi):
         pts = order[s:e]
-        for i in pts:  # in geodesic order, so a predecessor in the same bin already has its entry
-            p = pred[i]
-            entry[i] = -1 if p < 0 else (node[p] if b[p] < bi else entry[p])
+        entry[pts] = np.where(src[pts] >= 0, node[np.maximum(src[pts], 0)], -1)   # that point's node: known by now
         rr, cc = r[a0:a1], c[a0:a1]
         ok = entry[rr] == entry[cc]
         loc[pts] = np.arange(len(pts))
@@ -514,12 +518,12 @@ def branch_paths(par, geo) -> tuple:
     """(paths, parent path of each) of a tree of nodes with parents `par` and geodesic distances `geo`: from each root
     the path follows the child that reaches farthest, and every other child starts a path of its own."""
     m = len(par)
-    order = np.argsort(geo, kind="stable")
-    reach = np.asarray(geo, np.float64).copy()
+    order = np.argsort(geo, kind="stable").tolist()
+    reach, par = np.asarray(geo, np.float64).tolist(), np.asarray(par).tolist()   # plain lists: scalar loops
     for i in order[::-1]:
         p = par[i]
         if p >= 0 and reach[i] > reach[p]: reach[p] = reach[i]
-    heavy, kids = np.full(m, -1), [[] for _ in range(m)]
+    heavy, kids = [-1] * m, [[] for _ in range(m)]
     for i in order:
         p = par[i]
         if p >= 0:
@@ -547,11 +551,12 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
     start, end, parent = list(start), list(end), list(parent)
     if not start: return start, end, parent
     S, E = np.asarray(start, np.float64), np.asarray(end, np.float64)
-    done = cKDTree(_along(S, E, 0.25 * reach)[0]).query(q)[0] <= reach
+    done = cKDTree(_along(S, E, 0.25 * reach)[0]).query(q, workers=-1)[0] <= reach
     far = np.flatnonzero(~done)
     if not len(far): return start, end, parent
     kd = cKDTree(q[far])
     ends = np.empty((len(E) + len(far), 3)); ends[:len(E)] = E[:, :3]   # every vertex, those of new spurs too
+    old = cKDTree(E[:, :3])
     if min_points is None: min_points = 1 if len(far) <= noisy_share * len(q) else 2
     for i in far[np.argsort(-geo[far], kind="stable")]:
         if done[i]: continue
@@ -562,7 +567,11 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
         done[chain] = True
         if j < 0 or len(near) < min_points: continue
         done[far[near]] = True
-        ps = int(np.argmin(((ends[:len(end)] - q[j]) ** 2).sum(1)))   # hang on the nearest vertex
+        dj, ps = old.query(q[j])                                       # hang on the nearest vertex: an old one
+        if len(end) > len(E):                                           # or one of a spur made here
+            dd = ((ends[len(E):len(end)] - q[j]) ** 2).sum(1)
+            if dd.min() < dj * dj: ps = len(E) + int(np.argmin(dd))
+        ps = int(ps)
         prev, last = np.asarray(end[ps], np.float64), -np.inf
         for v in chain[::-1]:
             if v != chain[0] and geo[v] - last < step: continue
@@ -593,7 +602,7 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
         raise TreebookError(f"cover must be a number of point spacings in [0, 1000), got {cover!r}")
     g, idx, root = neighbour_graph(q, k)
     q = q[idx]
-    spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1]))
+    spacing = float(np.median(cKDTree(q).query(q, 2, workers=-1)[0][:, 1]))
     geo, pred = hop_tree(g, root, power)
     node = np.unique(entry_nodes(np.floor(geo / (bin_spacings * spacing)).astype(np.int64), geo, pred, g),
                      return_inverse=True)[1]
@@ -607,44 +616,55 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
     paths, pp_of = branch_paths(par, gn)
     diag = _diag(q)
     near = max(apart * spacing, apart_diag * diag)
-    kept, attach, sibs = [None] * len(paths), [None] * len(paths), {}
+    far = max(twig * spacing, twig_diag * diag)
+    kept, attach, sibs, trees = [None] * len(paths), [None] * len(paths), {}, {}
     for i, p in enumerate(paths):
         pp = pp_of[i]
         while pp >= 0 and kept[pp] is None: pp = pp_of[pp]   # the parent path was dropped: hang on its own parent
         if pp >= 0:
-            beside = np.concatenate([kept[pp]] + sibs.get(pp, []))   # its parent, and its parent's paths so far
-            kd = cKDTree(cen[beside])
-            d, j = kd.query(cen[p])
-            out = np.flatnonzero(d > np.maximum(near, 2 * thick[beside[j]]))   # beyond the points of those
+            if gn[p[-1]] - gn[p[0]] < far: continue          # too short even untrimmed (gn rises along a path)
+            if pp not in trees: trees[pp] = cKDTree(cen[kept[pp]])
+            d, jp = trees[pp].query(cen[p])                  # the nearest node beside it: on its parent ...
+            by = kept[pp][jp]
+            if pp in sibs:                                   # ... or on its parent's paths kept so far
+                both = np.concatenate(sibs[pp])
+                if len(both) * len(p) <= 4096:               # few: every pair (building a k-d tree costs more)
+                    dd = ((cen[p][:, None] - cen[both][None]) ** 2).sum(-1)
+                    js = dd.argmin(1); ds = np.sqrt(dd[np.arange(len(p)), js])
+                else:
+                    if (pp, len(both)) not in trees: trees[(pp, len(both))] = cKDTree(cen[both])
+                    ds, js = trees[(pp, len(both))].query(cen[p])
+                d, by = np.where(ds < d, ds, d), np.where(ds < d, both[js], by)
+            out = np.flatnonzero(d > np.maximum(near, 2 * thick[by]))   # beyond the points of those
             if not len(out): continue                        # it runs along its parent all the way
             p = p[out[0]:]
-            far = max(twig * spacing, twig_diag * diag)
             if gn[p[-1]] - gn[p[0]] < far or d[-1] < far: continue   # too short, or back beside its parent at the tip
-            attach[i] = int(kept[pp][cKDTree(cen[kept[pp]]).query(cen[p[0]])[1]])
+            attach[i] = int(kept[pp][jp[out[0]]])
             sibs.setdefault(pp, []).append(p)
         elif i > 0: continue                                 # one root: the first path's
         kept[i] = p
     if smooth:   # a vertex is the median of its node's centre and its neighbours' on the path: a stray centre moves
-        pos = cen.copy()
-        for p in kept:
-            if p is not None and len(p) >= 3:
-                pos[p[1:-1]] = np.median(np.stack([cen[p[:-2]], cen[p[1:-1]], cen[p[2:]]]), 0)
-        cen = pos
+        three = [p for p in kept if p is not None and len(p) >= 3]   # kept paths share no node
+        if three:
+            a, b, c = (cen[np.concatenate([p[i:len(p) - 2 + i] for p in three])] for i in range(3))
+            cen = cen.copy(); cen[np.concatenate([p[1:-1] for p in three])] = np.maximum(
+                np.minimum(a, b), np.minimum(np.maximum(a, b), c))   # the median of three
     forks = {a for a in attach if a is not None}
     start, end, parent, seg_end = [], [], [], {}
-    for i, p in enumerate(kept):
+    cl, gl, same = cen.tolist(), gn.tolist(), lambda a, b: math.dist(a, b) <= 1e-9 * (1 + max(map(abs, b)))
+    for i, p in enumerate(kept):   # in plain floats: a numpy call per vertex costs more than the arithmetic
         if p is None: continue
         if attach[i] is None:   # the root: from the ground under the first node, never at its very centre
-            prev, ps = np.array([cen[p[0], 0], cen[p[0], 1], q[:, 2].min()]), -1
-            if np.linalg.norm(cen[p[0]] - prev) <= 1e-9 * (1 + np.abs(prev).max()): prev[2] -= 0.01 * spacing
-        else: prev, ps = cen[attach[i]], seg_end[attach[i]]
-        last = -np.inf
+            prev, ps = [cl[p[0]][0], cl[p[0]][1], float(q[:, 2].min())], -1
+            if same(cl[p[0]], prev): prev[2] -= 0.01 * spacing
+        else: prev, ps = cl[attach[i]], seg_end[attach[i]]
+        last, p = -np.inf, p.tolist()
         for j, v in enumerate(p):
-            if not (j in (0, len(p) - 1) or v in forks or gn[v] - last >= step * spacing): continue
-            last = gn[v]
-            if np.linalg.norm(cen[v] - prev) <= 1e-9 * (1 + np.abs(prev).max()): seg_end[v] = ps; continue
-            start.append(prev); end.append(cen[v]); parent.append(ps)
-            ps, prev = len(start) - 1, cen[v]; seg_end[v] = ps
+            if not (j in (0, len(p) - 1) or v in forks or gl[v] - last >= step * spacing): continue
+            last = gl[v]
+            if same(cl[v], prev): seg_end[v] = ps; continue
+            start.append(prev); end.append(cl[v]); parent.append(ps)
+            ps, prev = len(start) - 1, cl[v]; seg_end[v] = ps
     if not start: raise TreebookError(f"the {len(q)} points make no skeleton: is this a tree scan?")
     if cover:
         start, end, parent = cover_spurs(q, geo, pred, start, end, parent, cover * spacing, step * spacing,
@@ -662,21 +682,22 @@ def segment_radii(tree: Tree, points, min_points: int = 3, return_segment: bool 
     if not isinstance(tree, Tree) or not tree.n: raise TreebookError("segment_radii needs a non-empty Tree")
     q = np.asarray(points, np.float64)
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
-    spacing = float(np.median(cKDTree(q).query(q, 2)[0][:, 1])) if len(q) > 1 else _diag(s)
+    spacing = float(np.median(cKDTree(q).query(q, 2, workers=-1)[0][:, 1])) if len(q) > 1 else _diag(s)
     along, own = _along(s, e, max(0.5 * spacing, 1e-12))
-    seg = own[cKDTree(along).query(q)[1]]
+    seg = own[cKDTree(along).query(q, workers=-1)[1]]
     d = e[seg] - s[seg]
     u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
     dist = np.linalg.norm(q - s[seg] - u[:, None] * d, axis=1)
     cnt = np.bincount(seg, minlength=tree.n)
-    o = np.argsort(seg, kind="stable")
-    r = np.array([np.median(x) if len(x) >= min_points else np.nan for x in np.split(dist[o], np.cumsum(cnt)[:-1])])
-    par = tree.parent
-    for i in range(tree.n):  # parents come first
-        p = par[i]
-        if not np.isfinite(r[i]): r[i] = r[p] if p >= 0 else (np.nanmedian(r) if np.isfinite(r).any() else spacing)
+    x, first = dist[np.lexsort((dist, seg))], np.cumsum(cnt) - cnt   # distances sorted within each segment
+    ok = (cnt >= min_points) & (cnt > 0)
+    r = np.full(tree.n, np.nan)
+    r[ok] = (x[(first + (cnt - 1) // 2)[ok]] + x[(first + cnt // 2)[ok]]) / 2   # the medians
+    par, r = tree.parent, r.tolist()
+    for i, p in enumerate(par.tolist()):  # parents come first
+        if r[i] != r[i]: r[i] = r[p] if p >= 0 else (float(np.nanmedian(r)) if np.isfinite(r).any() else spacing)
         if p >= 0: r[i] = min(r[i], 1.05 * r[p])
-    r = np.maximum(r, 0.25 * spacing)
+    r = np.maximum(np.array(r), 0.25 * spacing)
     start, end = tree.start.copy(), tree.end.copy()
     end[:, 3] = r
     start[:, 3] = np.where(par >= 0, r[np.maximum(par, 0)], r)
@@ -771,7 +792,7 @@ def tube_distance(points, trees, k: int = 8, chunk: int = 100_000) -> np.ndarray
     out = np.empty(len(p))
     for a in range(0, len(p), chunk):
         q = p[a:a + chunk]
-        seg = own[kd.query(q, min(k, len(own)))[1]].reshape(len(q), -1)     # candidate segments of each point
+        seg = own[kd.query(q, min(k, len(own)), workers=-1)[1]].reshape(len(q), -1)     # candidate segments of each point
         s, d = S[seg], E[seg] - S[seg]
         t = np.clip(((q[:, None] - s[..., :3]) * d[..., :3]).sum(-1) / np.maximum((d[..., :3] ** 2).sum(-1), 1e-300),
                     0, 1)
