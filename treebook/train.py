@@ -29,13 +29,13 @@ from .hourglass import ARCHS, ModelConfig, TreeTransformer
 from .datasets import load_manifest, load_trees
 
 # %% auto #0
-__all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'sample_trees',
-           'demo_sample', 'elm_card', 'main']
+__all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'shipped_species',
+           'species_model', 'sample_trees', 'demo_sample', 'elm_card', 'main']
 
 # %% ../nbs/05_train.ipynb #7ba35ceb
 def sequence_loss(model, seqs) -> tuple:
     "(mean cross-entropy over non-[PAD] targets, number of those targets) of int64 sequences `seqs` (B, L) (Eq. 3)."
-    seqs = torch.as_tensor(seqs, dtype=torch.long)
+    seqs = torch.as_tensor(seqs, dtype=torch.long).to(next(model.parameters()).device)
     logits = model(seqs[:, :-1])
     target = seqs[:, 1:]
     loss = F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1), ignore_index=PAD)
@@ -77,9 +77,9 @@ def _dist_info():
     return (dist.get_rank(), dist.get_world_size()) if ws > 1 else (0, 1)
 
 # %% ../nbs/05_train.ipynb #d94e7b9e
-def _save_state(path, model, opt, step, epoch, best, config, args, seconds):
+def _save_state(path, model, opt, step, epoch, best, config, args, seconds, device=None):
     ckpt = {"format": "treebook.train", "version": 1, "step": step, "epoch": epoch, "best_val": best,
-            "seconds": seconds,
+            "seconds": seconds, "device": device,
             "config": asdict(config), "args": args, "model": model.state_dict(), "opt": opt.state_dict()}
     _atomic_write(Path(path), lambda f: torch.save(ckpt, f))
 
@@ -114,13 +114,16 @@ def _plot(log_path, png_path):
 
 # %% ../nbs/05_train.ipynb #7e37cb4d
 _WHOLE = dict(batch_size=1, epochs=1, ckpt_every=1, log_every=1, dim=1, depth=1, heads=1, warmup=0, val_trees=1,
-              steps=1, val_every=1, max_train=1, stop_after=1, threads=1)   # the smallest value of each count
+              steps=1, val_every=1, max_train=1, stop_after=1, threads=1, window=0)  # the smallest value of each count
 _POSITIVE = dict(lr=True, weight_decay=False, grad_clip=False, time_limit=True)   # > 0 (True) or >= 0 (False)
 
 def _check_train_args(order, arch, **kw):
     "Raise a `TreebookError` for an unknown `order` or `arch`, a count of `_WHOLE` too small, a rate not finite."
     if order not in ORDERS: raise TreebookError(f"unknown order {order!r}: choose one of {', '.join(ORDERS)}")
     if arch not in ARCHS: raise TreebookError(f"unknown arch {arch!r}: choose one of {', '.join(ARCHS)}")
+    device = kw.get("device", "cpu")
+    if device != "cpu" and not torch.cuda.is_available():
+        raise TreebookError(f"device {device!r}: PyTorch sees no GPU here; train with device='cpu'")
     for name, need in _WHOLE.items():
         v = kw[name]
         if v is not None and (not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < need):
@@ -164,7 +167,7 @@ def _run_tokenizer(out_dir, train_set, args: dict, resume: bool, rank: int) -> t
     "(Tokenizer, checkpoint of last.pt or None) of the run in `out_dir`: fitted and saved, or read back on `resume`."
     if resume:
         ckpt = _load_state(out_dir / "last.pt")
-        stored = {k: v for k, v in ckpt["args"].items() if k not in ("steps",)}
+        stored = {k: v for k, v in {"window": 0, **ckpt["args"]}.items() if k not in ("steps",)}   # runs before window
         mine = {k: v for k, v in args.items() if k not in ("steps",)}
         if stored != mine:
             diff = {k: (stored.get(k), mine.get(k)) for k in set(stored) | set(mine) if stored.get(k) != mine.get(k)}
@@ -177,10 +180,10 @@ def _run_tokenizer(out_dir, train_set, args: dict, resume: bool, rank: int) -> t
     return tok, None
 
 # %% ../nbs/05_train.ipynb #f130c49e
-def _model_opt(config, seed: int, lr: float, weight_decay: float, ckpt=None) -> tuple:
+def _model_opt(config, seed: int, lr: float, weight_decay: float, ckpt=None, device: str = "cpu") -> tuple:
     "(TreeTransformer of `config` seeded by `seed`, its AdamW with `weight_decay` on matrices only), or as in `ckpt`."
     torch.manual_seed(seed)
-    model = TreeTransformer(config)
+    model = TreeTransformer(config).to(device)
     decay = [p for p in model.parameters() if p.dim() >= 2]
     no_decay = [p for p in model.parameters() if p.dim() < 2]
     opt = torch.optim.AdamW([{"params": decay, "weight_decay": weight_decay},
@@ -194,7 +197,8 @@ def _train_step(net, model, opt, seqs, lr: float, grad_clip: float, world: int) 
     "One AdamW step of `model` (run as `net`, which may be its DDP wrapper) on `seqs`; the mean loss of all processes."
     model.train()
     for g in opt.param_groups: g["lr"] = lr
-    loss, _ = sequence_loss(net, seqs)
+    dev = next(model.parameters()).device
+    with torch.autocast(dev.type, torch.bfloat16, enabled=dev.type == "cuda"): loss, _ = sequence_loss(net, seqs)
     opt.zero_grad(set_to_none=True)
     loss.backward()
     if grad_clip: torch.nn.utils.clip_grad_norm_(model.parameters(), grad_clip)
@@ -206,8 +210,9 @@ def _train_step(net, model, opt, seqs, lr: float, grad_clip: float, world: int) 
 # %% ../nbs/05_train.ipynb #68ae4d5f
 class _Run:
     "The bookkeeping of one `train` call: step, best validation loss, seconds, and the files of `out_dir`."
-    def __init__(self, out_dir, model, opt, config, args, val_seqs, rank, world, ckpt=None):
+    def __init__(self, out_dir, model, opt, config, args, val_seqs, rank, world, ckpt=None, device_name=None):
         self.out_dir, self.model, self.opt, self.config, self.args = out_dir, model, opt, config, args
+        self.device_name = device_name                         # where it trains, stored in last.pt for the card
         self.val_seqs, self.rank, self.world = val_seqs, rank, world
         self.step, self.best = (ckpt["step"], ckpt["best_val"]) if ckpt else (0, float("inf"))
         self.log_path = out_dir / "log.csv"
@@ -242,7 +247,7 @@ def checkpoint(self: _Run, epoch: int):
     "Write `last.pt` (process 0), then wait for the other processes."
     if self.rank == 0:
         _save_state(self.out_dir / "last.pt", self.model, self.opt, self.step, epoch, self.best, self.config,
-                    self.args, self.seconds())
+                    self.args, self.seconds(), self.device_name)
     if self.world > 1: dist.barrier()
 
 # %% ../nbs/05_train.ipynb #6567b255
@@ -281,7 +286,8 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
           weight_decay: float = 0.1, grad_clip: float = 1.0, augment_data: bool = True, val_every: int | None = None,
           val_trees: int = 256, ckpt_every: int = 50, log_every: int = 10, max_train: int | None = None,
           stop_after: int | None = None, time_limit: float | None = None, threads: int | None = None,
-          resume: bool = False, seed: int = 0, progress: bool = True, rank_weights: bool = False) -> dict:
+          resume: bool = False, seed: int = 0, progress: bool = True, rank_weights: bool = False, window: int = 0,
+          device: str = "cpu") -> dict:
     """Train a `TreeTransformer` on the dataset in `data_dir`; files go to `out_dir` (see above).
     `steps` (default: `epochs` of the training split) sets the schedule's length; `stop_after` ends this call after
     that many steps in all (a planned interruption: resume later), `time_limit` after that many seconds of this call;
@@ -295,15 +301,17 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads,
                 batch_size=batch_size, world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup,
                 weight_decay=weight_decay, grad_clip=grad_clip, augment=augment_data, val_trees=len(val_set),
-                max_train=max_train, seed=seed)
+                max_train=max_train, seed=seed, window=window)
     tok, ckpt = _run_tokenizer(out_dir, train_set, args, resume, rank)
     config = ModelConfig(arch=arch, dim=dim, depth=depth, heads=heads,
-                         max_len=max(t.n for t in train_set + val_set) * 8 + 16)
-    model, opt = _model_opt(config, seed, lr, weight_decay, ckpt)
+                         max_len=max(t.n for t in train_set + val_set) * 8 + 16, window=window)
+    model, opt = _model_opt(config, seed, lr, weight_decay, ckpt, device)
+    where = (torch.cuda.get_device_name(device) if device != "cpu" else
+             f"{torch.get_num_threads()} thread(s) of a {os.cpu_count()}-core CPU")
     sampler = torch.utils.data.DistributedSampler(range(len(train_set)), num_replicas=world, rank=rank, shuffle=True,
                                                   seed=seed, drop_last=True)
     net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True) if world > 1 else model
-    run = _Run(out_dir, model, opt, config, args, tok.encode_batch(val_set, order), rank, world, ckpt)
+    run = _Run(out_dir, model, opt, config, args, tok.encode_batch(val_set, order), rank, world, ckpt, where)
     total = steps or epochs * (len(sampler) // batch_size)
     batch_seqs = lambda chosen, epoch: torch.from_numpy(tok.encode_batch(
         [augment(train_set[i], seed, epoch, i) if augment_data else train_set[i] for i in chosen], order))
@@ -340,22 +348,43 @@ def load_pretrained(model: str = "elm"):
                             f"tokenizer.json")
     return TreeTransformer.load(pt), Tokenizer.load(tok_path)
 
+# %% ../nbs/05_train.ipynb #f28b7b18
+def shipped_species() -> list:
+    "The species (botany presets) whose unconditional model ships: `NAME.pt` and `NAME.tok.json` in `WEIGHTS`."
+    from treebook.botany import SPECIES
+    return [s for s in SPECIES if (WEIGHTS / f"{s}.pt").is_file() and (WEIGHTS / f"{s}.tok.json").is_file()]
+
+# %% ../nbs/05_train.ipynb #3751776b
+def species_model(name: str) -> str:
+    "The shipped model of species `name` for `load_pretrained`; a `TreebookError` names the species that ship."
+    from treebook.botany import SPECIES
+    have = ", ".join(shipped_species()) or "none yet"
+    if name not in SPECIES:
+        raise TreebookError(f"unknown species {name!r}: the species are {', '.join(SPECIES)}; models ship for {have}")
+    if name not in shipped_species():
+        raise TreebookError(f"no model of {name!r} ships yet: models ship for {have} (`make species SPECIES={name}` "
+                            "trains one)")
+    return name
+
 # %% ../nbs/05_train.ipynb #be98b4ad
 def _batch_seed(seed: int, k: int) -> int:
     "The seed of batch `k` of a large sample (batch 0 keeps `seed`, so a sample that fits one batch is as before)."
     return seed if k == 0 else int(np.random.SeedSequence([seed, k]).generate_state(1)[0])
 
 # %% ../nbs/05_train.ipynb #1e745d48
-def sample_trees(n: int = 16, model: str = "elm", temperature: float = 1.0, top_p: float | None = None,
+def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0, top_p: float | None = None,
                  top_k: int | None = None, seed: int = 0, structure: bool = True, progress: bool = False,
-                 batch_size: int = 256) -> list:
-    """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair); `structure`
-    keeps every tree connected. They are drawn `batch_size` at a time, so memory stays bounded however large `n` is."""
+                 batch_size: int = 256, species: str | None = None) -> list:
+    """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair; default `elm`)
+    or from the shipped model of `species`; `structure` keeps every tree connected. They are drawn `batch_size` at a
+    time, so memory stays bounded however large `n` is."""
+    if model is not None and species is not None: raise TreebookError("give a model or a species, not both")
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
     if not (math.isfinite(temperature) and temperature >= 0):
         raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
+    model = species_model(species) if species is not None else "elm" if model is None else model
     net, tok = load_pretrained(model) if isinstance(model, (str, Path)) else model
     from treebook.sampling import sample
     threads = torch.get_num_threads()
@@ -448,11 +477,12 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
                                ("val-every", whole(), None),
                                ("val-trees", whole(), 256), ("ckpt-every", whole(), 50), ("max-train", whole(), None),
                                ("stop-after", whole(), None), ("time-limit", positive, None),
-                               ("threads", whole(1, 1024), None),
+                               ("threads", whole(1, 1024), None), ("window", whole(0), 0),
                                ("seed", whole(0, 2 ** 32 - 1), 0)):
         p.add_argument(f"--{name}", type=typ, default=default)
     p.add_argument("--no-augment", action="store_true"); p.add_argument("--resume", action="store_true")
     p.add_argument("--quiet", action="store_true"); p.add_argument("--rank-weights", action="store_true")
+    p.add_argument("--device", default="cpu", help="cpu (default) or cuda")
     a = p.parse_args(argv)
     r = train(a.data, a.out, order=a.order, arch=a.arch, dim=a.dim, depth=a.depth, heads=a.heads,
               batch_size=a.batch_size,
@@ -461,7 +491,7 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
               val_every=a.val_every, val_trees=a.val_trees, ckpt_every=a.ckpt_every, max_train=a.max_train,
               stop_after=a.stop_after, time_limit=a.time_limit, threads=a.threads, resume=a.resume, seed=a.seed,
               progress=not a.quiet,
-              rank_weights=a.rank_weights)
+              rank_weights=a.rank_weights, window=a.window, device=a.device)
     r.pop("model")
     if int(os.environ.get("RANK", "0")) == 0: print(json.dumps(r))
     return r
