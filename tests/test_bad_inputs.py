@@ -16,10 +16,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
+import treebook
+from treebook.botany import SPECIES
 from treebook.cli import build_parser, main
 from treebook.tree import Tree, TreebookError, example_tree
 
-UNWRITABLE = "/proc/treebook_out"   # the folder exists, nobody can create a file in it: a full or read-only disk
+UNWRITABLE = "/proc/treebook_out"
+WEIGHTS = Path(treebook.__file__).resolve().parent / "data" / "weights"   # the folder exists, nobody can create a file in it: a full or read-only disk
 
 
 def _json_tree(t: Tree, **change) -> str:
@@ -175,6 +178,8 @@ for name, argv, says in [
         ("sample-model-folder", ["sample", "--model", "{i}/folder", "--out", "{o}/s"], "folder"),
         ("sample-model-random", ["sample", "--model", "{i}/ckpt/random.pt", "--out", "{o}/s"], "random.pt"),
         ("sample-model-name", ["sample", "--model", "baobab", "--out", "{o}/s"], "baobab"),
+        ("sample-species-unknown", ["sample", "--species", "baobab", "--out", "{o}/s"], "unknown species 'baobab'"),
+        ("sample-species-and-model", ["sample", "--species", "elm", "--model", "elm", "--out", "{o}/s"], "not allowed"),
         ("sample-too-many", ["sample", "--n", "100000000000", "--out", "{o}/s"], "--n"),
         ("grow-model", ["grow", "--model", "baobab", "--out", "{o}/g"], "baobab"),
         ("grow-model-missing", ["grow", "--model", "{i}/missing.pt", "--out", "{o}/g"], "no such model file"),
@@ -219,6 +224,11 @@ for name, argv, says in [
         ("train-lr-nan", ["train", "--data", "{i}/data", "--out", "{o}/run", "--lr", "nan"], "--lr"),
         ("no-command", [], "COMMAND"), ("unknown-command", ["explode"], "explode")]:
     case(name, argv, says)
+
+
+# a species whose model does not ship (yet): the message names those that do
+for sp in [s for s in SPECIES if not (WEIGHTS / f"{s}.pt").is_file()][:1]:
+    case("sample-species-unshipped", ["sample", "--species", sp, "--out", "{o}/s"], f"no model of '{sp}' ships yet")
 
 
 def _files(*roots) -> dict:

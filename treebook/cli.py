@@ -270,11 +270,12 @@ MAX_SAMPLES = 100_000   # `sample --n`: drawn in batches of bounded memory, writ
 
 # %% ../nbs/11_cli.ipynb #93356f04
 def cmd_sample(args):
-    from treebook.train import sample_trees
-    out_folder(args.out); _model_arg(args.model)
-    trees = sample_trees(args.n, model=args.model, temperature=args.temperature, top_p=args.top_p, top_k=args.top_k,
+    from treebook.train import sample_trees, species_model
+    model = species_model(args.species) if args.species else args.model or "elm"
+    out_folder(args.out); _model_arg(model)
+    trees = sample_trees(args.n, model=model, temperature=args.temperature, top_p=args.top_p, top_k=args.top_k,
                          seed=args.seed, structure=not args.no_structure, progress=True)
-    for p in write_trees(trees, args.out, f"sampled_{Path(str(args.model)).stem}", picture=args.render, seed=args.seed):
+    for p in write_trees(trees, args.out, f"sampled_{Path(str(model)).stem}", picture=args.render, seed=args.seed):
         print(f"wrote {p}")
     return 0
 
@@ -582,7 +583,10 @@ def _add_sample(sub):
     s = sub.add_parser("sample", help="sample trees from a shipped model",
                        description="Sample trees from a pretrained HourglassTree model.")
     s.add_argument("--n", type=flag_number(int, 1, MAX_SAMPLES), default=16, help="number of trees (default: 16)")
-    s.add_argument("--model", default="elm", help="shipped model name or a checkpoint path (default: elm)")
+    which = s.add_mutually_exclusive_group()
+    which.add_argument("--model", default=None, help="shipped model name or a checkpoint path (default: elm)")
+    which.add_argument("--species", default=None,
+                       help="the shipped model of this species: elm, hickory, shadbush, spruce, tulip or vitellaria")
     s.add_argument("--temperature", type=flag_number(float, 0), default=1.0,
                    help="sampling temperature (default: 1.0, the model's own distribution)")
     s.add_argument("--top-p", type=flag_number(float, above=0, hi=1), default=1.0,
