@@ -39,7 +39,6 @@ class ModelConfig:
     mlp_ratio: int = 4      # hidden width of the feed-forward layer, in multiples of `dim`
     dropout: float = 0.0
     window: int = 0         # the full-resolution layers attend to the last `window` tokens only (0: to all)
-
     def __post_init__(self):
         if self.arch not in ARCHS: raise TreebookError(f"unknown arch {self.arch!r}: choose one of {', '.join(ARCHS)}")
         if self.dim <= 0 or self.heads <= 0 or self.dim % self.heads:
@@ -50,10 +49,8 @@ class ModelConfig:
                 f"(one layer down and one up per scale, at least one in the bottleneck); got {self.depth}"
             )
         if self.max_len < 1 or self.vocab_size < 1: raise TreebookError("max_len and vocab_size must be positive")
-        if isinstance(self.window, bool) or not isinstance(self.window, int) or self.window < 0:
-            raise TreebookError(f"window must be a whole number >= 0 (0: no window), got {self.window!r}")
-        if self.window and not self.factors:
-            raise TreebookError(f"window is for the outer layers of an hourglass; arch {self.arch!r} has none")
+        if type(self.window) is not int or self.window < 0 or (self.window and not self.factors):
+            raise TreebookError(f"window must be a whole number >= 0, and 0 for arch 'pt'; got {self.window!r}")
 
     @property
     def factors(self) -> tuple:
@@ -311,7 +308,8 @@ def save(self: TreeTransformer, path, **meta) -> Path:
         json.dumps(meta)
     except TypeError as e:
         raise TreebookError(f"checkpoint metadata must be plain numbers, strings, lists and dicts: {e}") from None
-    ckpt = {"format": "treebook.hourglass", "version": CHECKPOINT_VERSION, "config": asdict(self.config),
+    config = {k: v for k, v in asdict(self.config).items() if not (k == "window" and v == 0)}  # older readers lack it
+    ckpt = {"format": "treebook.hourglass", "version": CHECKPOINT_VERSION, "config": config,
             "state_dict": {k: v.detach().cpu() for k, v in self.state_dict().items()}, "meta": meta}
     return _atomic_write(Path(path), lambda f: torch.save(ckpt, f))
 
