@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.treebook-installed
 FLAGS ?=
 
-.PHONY: install demo test test-slow readme book export clean lint elm
+.PHONY: install demo test test-slow readme book export clean lint elm species
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -69,6 +69,25 @@ elm:
 	    --batch-size 16 --steps 4000 --lr 2e-3 --warmup 100 --val-every 500 --val-trees 128 --ckpt-every 50 \
 	    --time-limit 6000 --threads 2 --seed 0 --quiet $$([ -f $(RUN)/last.pt ] && echo --resume)
 	$(PY) scripts/ship_elm.py --run $(RUN) --data data/elm --temperature 1.0 --top-p 1.0
+
+# Every other species' model (chapter 05a), made as `make elm` makes the elm's and as resumable: `make species
+# SPECIES=spruce` grows data/spruce (TREES trees up to the preset's max_branches), trains runs/spruce by the elm's
+# recipe in calls of 100 minutes (a call that ends before the schedule does exits with status 3: run the same command
+# again), then evaluates it and ships spruce.{pt,tok.json,md}, results/spruce_eval.json and results/spruce_loss.png.
+# TRAIN_FLAGS go to the training (e.g. --window 128). A run from `scripts/gpu.sh species`: `$(PY) -m
+# treebook.species_runs unpack OUT/spruce.tar runs/spruce-gpu`, then `make species SPECIES=spruce
+# SPECIES_RUN=runs/spruce-gpu TREES=...` (TREES as on the GPU): the run is evaluated and shipped as it is.
+SPECIES ?= spruce
+TREES ?= 10000
+SPECIES_RUN ?= runs/$(SPECIES)
+TRAIN_FLAGS ?=
+species:
+	$(PY) -m treebook.species_runs data $(SPECIES) --trees $(TREES) --workers 2
+	$(PY) -m treebook.species_runs train $(SPECIES) --run $(SPECIES_RUN) --threads 2 --time-limit 6000 --quiet $(TRAIN_FLAGS)
+	$(PY) scripts/ship_elm.py --species $(SPECIES) --run $(SPECIES_RUN) --temperature 1.0 --top-p 1.0 \
+	    --recipe "make species SPECIES=$(SPECIES)$(if $(filter 10000,$(TREES)),, TREES=$(TREES))$(if \
+	    $(filter runs/$(SPECIES),$(SPECIES_RUN)),, SPECIES_RUN=$(SPECIES_RUN))$(if $(strip $(TRAIN_FLAGS)),\
+	    TRAIN_FLAGS='$(strip $(TRAIN_FLAGS))')"
 
 clean:
 	rm -rf build dist *.egg-info treebook-demo _proc

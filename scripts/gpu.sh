@@ -13,12 +13,14 @@
 #   (a machine that cannot scan: no open3d). Each --work receives the unpacked pool; OUTDIR receives NAME.pt (NAME: the
 #   last part of --work), the run's checkpoint, and NAME.log. To evaluate, put NAME.pt in its --work as checkpoint.pt
 #   and run partnet.py train with the same ARGS, --device cuda, without --train-only: it scores on the CPU.
-# Set TREEBOOK_COMMIT to the commit being run (the copy of the tree there may carry a stale git history).
-# DEVICE=cpu tries the script on a machine without one.
+# Usage: scripts/gpu.sh species SECONDS OUTDIR NAME... [FLAGS]: a model per species, all side by side (chapter 05a).
+# TREEBOOK_COMMIT: the commit being run (the copy there may carry a stale git history). DEVICE=cpu: without a GPU.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 kind=$1; arg=$2; dest=$3; shift 3; jobs=("$@"); dev=${DEVICE:-cuda}; rc=0
 mkdir -p "$dest" tmp
+[ "$kind" = species ] && export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}" &&   # treebook.species_runs.gpu_runs
+  exec python3 -m treebook.species_runs gpu "$arg" "$dest" "${jobs[@]}" --device "$dev"
 flag() { local prev="" w; for w in $2; do [ "$prev" = "$1" ] && echo "$w"; prev=$w; done; }
 run_all() {   # every job at once, each with the arguments "$1 JOB" prints; output to "$2 JOB"
   local pids=() job p
@@ -35,7 +37,7 @@ if [ "$kind" = partnet ]; then
 b['opt'] = dict(state={}, param_groups=b['opt']['param_groups'])   # loads as a fresh Adam: enough to evaluate
 torch.save(b, '$dest/$n.pt')" || rc=1; tail -c 300 "$dest/$n.log"; echo; done; exit $rc
 fi
-[ "$kind" = conditions ] || { echo "usage: scripts/gpu.sh conditions|partnet ..." >&2; exit 2; }
+[ "$kind" = conditions ] || { echo "usage: scripts/gpu.sh conditions|partnet|species ..." >&2; exit 2; }
 set -e; script=train_conditions.py; log="$dest/log.txt"; : > "$log"; log_of() { echo "$log"; }
 start=$(date +%s); touch tmp/gpu-start
 [ -f data/elm/manifest.json ] || python -c "from treebook.datasets import generate_dataset; generate_dataset('elm', 10000, 'data/elm', max_branches=200, workers=$(nproc), seed=0)" >> "$log" 2>&1

@@ -30,7 +30,7 @@ from .datasets import load_manifest, load_trees
 
 # %% auto #0
 __all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'shipped_species',
-           'species_model', 'sample_trees', 'demo_sample', 'elm_card', 'main']
+           'species_model', 'sample_trees', 'demo_sample', 'main']
 
 # %% ../nbs/05_train.ipynb #7ba35ceb
 def sequence_loss(model, seqs) -> tuple:
@@ -210,9 +210,11 @@ def _train_step(net, model, opt, seqs, lr: float, grad_clip: float, world: int) 
 # %% ../nbs/05_train.ipynb #68ae4d5f
 class _Run:
     "The bookkeeping of one `train` call: step, best validation loss, seconds, and the files of `out_dir`."
-    def __init__(self, out_dir, model, opt, config, args, val_seqs, rank, world, ckpt=None, device_name=None):
+    def __init__(self, out_dir, model, opt, config, args, val_seqs, rank, world, ckpt=None):
         self.out_dir, self.model, self.opt, self.config, self.args = out_dir, model, opt, config, args
-        self.device_name = device_name                         # where it trains, stored in last.pt for the card
+        dev = next(model.parameters()).device                  # where it trains, stored in last.pt for the card
+        self.device_name = (torch.cuda.get_device_name(dev) if dev.type == "cuda" else
+                            f"{torch.get_num_threads()} thread(s) of a {os.cpu_count()}-core CPU")
         self.val_seqs, self.rank, self.world = val_seqs, rank, world
         self.step, self.best = (ckpt["step"], ckpt["best_val"]) if ckpt else (0, float("inf"))
         self.log_path = out_dir / "log.csv"
@@ -295,8 +297,7 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     _check_train_args(**locals())
     data_dir, out_dir = _open_run(data_dir, out_dir, resume)
     if threads: torch.set_num_threads(int(threads))
-    rank, world = _dist_info()
-    t_call = time.time()
+    (rank, world), t_call = _dist_info(), time.time()
     train_set, val_set = _train_val(data_dir, max_train, val_trees, batch_size, world)
     args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads,
                 batch_size=batch_size, world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup,
@@ -306,12 +307,10 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     config = ModelConfig(arch=arch, dim=dim, depth=depth, heads=heads,
                          max_len=max(t.n for t in train_set + val_set) * 8 + 16, window=window)
     model, opt = _model_opt(config, seed, lr, weight_decay, ckpt, device)
-    where = (torch.cuda.get_device_name(device) if device != "cpu" else
-             f"{torch.get_num_threads()} thread(s) of a {os.cpu_count()}-core CPU")
     sampler = torch.utils.data.DistributedSampler(range(len(train_set)), num_replicas=world, rank=rank, shuffle=True,
                                                   seed=seed, drop_last=True)
     net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True) if world > 1 else model
-    run = _Run(out_dir, model, opt, config, args, tok.encode_batch(val_set, order), rank, world, ckpt, where)
+    run = _Run(out_dir, model, opt, config, args, tok.encode_batch(val_set, order), rank, world, ckpt)
     total = steps or epochs * (len(sampler) // batch_size)
     batch_seqs = lambda chosen, epoch: torch.from_numpy(tok.encode_batch(
         [augment(train_set[i], seed, epoch, i) if augment_data else train_set[i] for i in chosen], order))
@@ -415,52 +414,6 @@ def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
     grid = image_grid(images, labels=[f"seed {seed}, #{i}" for i in range(n)])
     paths.append(_atomic_write(out_dir / "sampled_elm.png", lambda f: grid.save(f, format="png")))
     return paths
-
-# %% ../nbs/05_train.ipynb #3e60671c
-def elm_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100) -> str:
-    ("The model card (markdown) of the shipped elm from its evaluation record `res` (`results/elm_eval.json`): data, "
-     "model (`max_len` its context), training, command, scores; `batch` and `n_connect` as the evaluation sampled.")
-    run, ar, d, smp, s, r = res["run"], res["run"]["args"], res["data"], res["sampling"], res["scores"], \
-        res["reference_train_vs_test"]
-    stopped = ("" if run["last_step"] >= ar.get("steps", 0) else
-               f" of a {ar['steps']:,}-step schedule (stopped by --time-limit)")
-    epochs = run["last_step"] * ar["batch_size"] * ar["world"] / d["train"]
-    rows = "\n".join(f"| {k} | {s[k]:.4g} | {r.get(k, float('nan')):.4g} |"
-                     for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD"))
-    rows += f"\n| Novel | {s['Novel']:.4g} | - |"
-    cs, cf = res["Connect_structure"], res["Connect_free"]
-    return f"""# elm: a DFS / Full hourglass transformer for procedural elms
-
-- **Data**: `generate_dataset('elm', 10000, 'data/elm', max_branches=200, workers=2, seed=0)`: {d['train']} training \
-trees, {d['test']} held out (the dataset's own split); up to 200 branches, {res['branches_mean']:.0f} on average \
-in the samples.
-- **Model**: arch `{ar['arch']}`, order `{ar['order']}`, dim {ar['dim']}, depth {ar['depth']}, heads {ar['heads']}, \
-{run['n_params']:,} parameters, max_len {max_len}.
-- **Training**: AdamW (betas 0.9/0.95, weight decay {ar['weight_decay']}), peak lr {ar['lr']}, {ar['warmup']} warm-up \
-steps then cosine to a tenth, batch {ar['batch_size']} x {ar['world']} process(es), gradient clipping \
-{ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}; {run['last_step']} steps{stopped} \
-({epochs:.2f} epochs) in {(run['train_seconds'] or 0) / 60:.0f} minutes on 2 shared CPU cores. Shipped weights: step \
-{run['best_step']} (lowest validation loss on 128 held-out trees).
-- **Command**: `make elm` (resumable), which ends with `{res['command']}`.
-- **Commit** of the evaluation: {res['commit']}; full figures in `results/elm_eval.json`.
-
-## Scores on the held-out elms
-
-{smp['n']} trees sampled with temperature {smp['temperature']}, top-p {smp['top_p']}, structure-aware decoding, seeds \
-{smp['seed']}.. (batches of {batch}); clouds of 2,048 points in the radius-0.5 sphere. FPD is our stand-in for FID \
-(Frechet distance of species-PointNet features), not FID.
-
-| metric | samples vs held-out | training trees vs held-out (reference) |
-|---|---|---|
-{rows}
-
-- PPL on the held-out {d['test']}: {res['PPL']:.3f}
-- Connect with structure-aware decoding: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
-without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f})
-
-## Against the issue's quality figures
-
-""" + "\n".join(f"- {k}: {'met' if v else 'NOT met'}" for k, v in res["targets"].items()) + "\n"
 
 # %% ../nbs/05_train.ipynb #633825fb
 def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
