@@ -30,7 +30,9 @@ from treebook.scan import scan  # noqa: E402
 from treebook.tree import Tree, _atomic_write  # noqa: E402
 
 # n: points (a range drawn per scan); views: scanner stations; noise: Gaussian, of the tree's size;
-# move: (share of points, largest move as a fraction of the diagonal); holes: (least, most) share removed in patches
+# move: (share of points, largest move as a fraction of the diagonal); holes: (least, most) share removed in patches;
+# thick: the stem's radius at the base as a fraction of the height (about 1/80, as grown trees; the procedural ones are
+# thinner), every radius scaled by the same factor: stems many point spacings wide, seen from two stations, as in TLS
 CONDITIONS = dict(
     sparse=dict(n=(2000, 3000), views=3, noise=0.001),
     noisy=dict(n=(2000, 3000), views=3, noise=0.001, move=(1 / 3, 0.025)),
@@ -38,6 +40,7 @@ CONDITIONS = dict(
     dense=dict(n=(15000, 120000), views=6, noise=0.0005),
     leafy=dict(n=(20000, 30000), views=3, noise=0.001, leaves=True),
     station=dict(n=(8000, 15000), views=1, noise=0.001),
+    tls=dict(n=(40000, 100000), views=2, noise=0.0003, thick=0.012),
 )
 
 
@@ -49,6 +52,10 @@ def make_scan(sp, i, cond, seed):
     t = grow(sp, seed=seed, stages=1, max_branches=cap)[-1]
     h = float(SPECIES[sp].height)
     truth = Tree(t.start * h, t.end * h, t.parent, check=False)   # metres: radius scales with the positions
+    if "thick" in kw:
+        f = max(1.0, kw["thick"] * h / float(truth.start[truth.parent < 0, 3].max()))
+        s_, e_ = truth.start.copy(), truth.end.copy(); s_[:, 3] *= f; e_[:, 3] *= f
+        truth = Tree(s_, e_, truth.parent, check=False)
     n = int(rng.integers(kw["n"][0], kw["n"][1] + 1))
     sc = scan(truth, n_points=n, views=kw["views"], noise=kw["noise"], outliers=0.0, leaves=kw.get("leaves", False), seed=seed)
     p, wood = sc.points.astype(np.float64), ~sc.foliage

@@ -30,7 +30,7 @@ def part(name):
 
 
 P = read("reconstruct_peer.json")
-CONDS, METHODS = ["sparse", "noisy", "holes", "dense", "leafy", "station", "real"], ["paths", "classic", "partnet",
+CONDS, METHODS = ["sparse", "noisy", "holes", "dense", "leafy", "station", "tls", "real"], ["paths", "classic", "partnet",
                                                                                    "adtree", "truth"]
 COLS = ["f1_tight", "surf_within", "len_ratio", "one_component", "seconds"]
 S = {k.replace("_cli", ""): v for k, v in P["summary"].items()}   # --cli runs tag treebook's methods `_cli`

@@ -22,8 +22,8 @@ from .pointio import read_points
 __all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'neighbour_graph', 'level_set_skeleton',
            'hermite_joins', 'sample_skeleton', 'skeleton_distance', 'coverage', 'voxel_means', 'voxel_down',
            'ransac_plane', 'remove_ground', 'prepare_points', 'point_labels', 'hop_tree', 'entry_nodes', 'branch_paths',
-           'cover_spurs', 'path_skeleton', 'segment_radii', 'pipe_radii', 'find_trees', 'tube_distance',
-           'tree_coverage', 'wood_points', 'wood_mask', 'reconstruct']
+           'ring_circles', 'onto_rings', 'cover_spurs', 'path_skeleton', 'segment_radii', 'pipe_radii', 'find_trees',
+           'tube_distance', 'tree_coverage', 'wood_points', 'wood_mask', 'reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #77b538d9
 def neighbour_graph(points, k: int = 10) -> tuple:
@@ -539,19 +539,94 @@ def branch_paths(par, geo) -> tuple:
         stack += [(c, len(paths) - 1) for v in path[::-1] for c in kids[v] if c != heavy[v]]
     return paths, np.array(parent_path, np.int64)
 
+# %% ../nbs/09b_reconstruct.ipynb #4713168c
+def _axis_distances(s, e, q, step: float) -> tuple:
+    "(nearest segment, distance to its axis) of each point `q`, the segments `s`-`e` (m, 3) sampled every `step`."
+    along, own = _along(s, e, max(step, 1e-12))
+    seg = own[cKDTree(along).query(q, workers=-1)[1]]
+    d = e[seg] - s[seg]
+    u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
+    return seg, np.linalg.norm(q - s[seg] - u[:, None] * d, axis=1)
+
+# %% ../nbs/09b_reconstruct.ipynb #bb56b690
+def _medians(group, x, m: int, min_count: int = 1) -> np.ndarray:
+    "Median (m,) of the values `x` of each of `m` groups (`group` of each value); NaN where fewer than `min_count`."
+    cnt = np.bincount(group, minlength=m)
+    v, first = x[np.lexsort((x, group))], np.cumsum(cnt) - cnt   # values sorted within each group
+    ok = (cnt >= max(min_count, 1))
+    out = np.full(m, np.nan)
+    out[ok] = (v[(first + (cnt - 1) // 2)[ok]] + v[(first + cnt // 2)[ok]]) / 2
+    return out
+
+# %% ../nbs/09b_reconstruct.ipynb #8f876d09
+def ring_circles(points, g, root: int, spacing: float, coarse: int = 120, min_spacings: float = 2.0, fit: float = 0.25,
+                 density: float = 0.5, min_points: int = 8) -> tuple:
+    """(ring of each of `points`, centre (m, 3) and radius (m,) of each ring) of the level-set rings of the neighbour
+    graph `g` (bins of geodesic distance from `root`, a `coarse`th of the diagonal and at least two `spacing`s wide).
+    A ring gets a circle (least squares in its plane of widest spread) only if it is a slice of a tube: a radius of at
+    least `min_spacings`, points off the circle by `fit` of the radius at most (rms), the centre within 1.5 radii of
+    the points' mean, and at least `density` of a half circle's points; other rings get radius 0."""
+    q = np.asarray(points, np.float64); n = len(q)
+    h = max(_diag(q) / coarse, 2 * spacing)
+    b = np.floor(dijkstra(g, indices=root) / h).astype(np.int64)
+    gc = g.tocoo(); same = b[gc.row] == b[gc.col]
+    ring = connected_components(coo_matrix((np.ones(same.sum()), (gc.row[same], gc.col[same])), shape=(n, n)),
+                                directed=False)[1]
+    m = ring.max() + 1; cnt = np.bincount(ring, minlength=m)
+    centre = np.stack([np.bincount(ring, q[:, d], m) for d in range(3)], 1) / cnt[:, None]
+    radius = np.zeros(m)
+    o = np.argsort(ring, kind="stable"); first = np.r_[0, np.cumsum(cnt)]
+    for k in np.flatnonzero(cnt >= max(min_points, 3)):
+        p = q[o[first[k]:first[k + 1]]]
+        c0 = p.mean(0); d = p - c0
+        _, V = np.linalg.eigh(d.T @ d)
+        if np.sqrt(2 * np.linalg.eigvalsh(d.T @ d / len(p))[1]) < min_spacings * spacing: continue   # thin: skip
+        x, y = d @ V[:, 2], d @ V[:, 1]
+        sol = np.linalg.lstsq(np.column_stack([x, y, np.ones_like(x)]), x * x + y * y, rcond=None)[0]
+        a, bb = sol[0] / 2, sol[1] / 2
+        r = float(np.sqrt(max(sol[2] + a * a + bb * bb, 0.0)))
+        rms = float(np.sqrt(((np.hypot(x - a, y - bb) - r) ** 2).mean()))
+        if (r >= min_spacings * spacing and rms <= fit * r and np.hypot(a, bb) <= 1.5 * r
+                and len(p) >= density * np.pi * r * h / spacing ** 2):
+            centre[k], radius[k] = c0 + a * V[:, 2] + bb * V[:, 1], r
+    return ring, centre, radius
+
+# %% ../nbs/09b_reconstruct.ipynb #e1ee913c
+def onto_rings(node, centre, spread, ring, ring_centre, ring_radius) -> tuple:
+    """(centre, spread) of each node with those of the nodes whose points lie mostly in a ring with a circle
+    (`ring_circles`) moved to the circle's centre, their spread at least 0.6 of its radius: on a stem, the lanes of
+    the paths fall onto its axis, and a path must leave the stem's bark to count as a branch."""
+    node, ring = np.asarray(node), np.asarray(ring)
+    R = int(ring.max()) + 1
+    key, c = np.unique(node * R + ring, return_counts=True)
+    nd, rg = key // R, key % R
+    o = np.lexsort((-c, nd)); lead = np.r_[True, nd[o][1:] != nd[o][:-1]]
+    main = np.full(len(centre), -1); main[nd[o][lead]] = rg[o][lead]   # the ring holding most of a node's points
+    ok = (main >= 0) & (np.asarray(ring_radius)[np.maximum(main, 0)] > 0)
+    centre, spread = np.array(centre, np.float64), np.array(spread, np.float64)
+    centre[ok] = ring_centre[main[ok]]
+    spread[ok] = np.maximum(spread[ok], 0.6 * ring_radius[main[ok]])
+    return centre, spread
+
 # %% ../nbs/09b_reconstruct.ipynb #648358a1
 def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float, min_points: int | None = None,
-                noisy_share: float = 0.08) -> tuple:
+                noisy_share: float = 0.08, thick: float = 0.0) -> tuple:
     """(start, end, parent) of the skeleton's segments with spurs added to reach the `points` farther than `reach`
     from it: from the farthest such point (by `geo`) back along its shortest path `pred` until the path comes within
     `reach`, a vertex every `step` of `geo`, hung on the nearest vertex of the skeleton. A spur is made only if
     `min_points` such points lie within `reach` of it; by default 1 if at most `noisy_share` of the points are that
-    far (a clean scan: a lone far point is a twig seen from afar), else 2 (a noisy scan: a lone one is likely noise)."""
+    far (a clean scan: a lone far point is a twig seen from afar), else 2 (a noisy scan: a lone one is likely noise).
+    A segment whose points lie a median `thick` or more from its axis (0: none) is a stem: `reach` counts from its
+    bark."""
     q = np.asarray(points, np.float64)
     start, end, parent = list(start), list(end), list(parent)
     if not start: return start, end, parent
     S, E = np.asarray(start, np.float64), np.asarray(end, np.float64)
-    done = cKDTree(_along(S, E, 0.25 * reach)[0]).query(q, workers=-1)[0] <= reach
+    if thick > 0:
+        seg, dist = _axis_distances(S[:, :3], E[:, :3], q, 0.25 * reach)
+        r = np.nan_to_num(_medians(seg, dist, len(S)))
+        done = dist <= reach + np.where(r >= thick, r, 0)[seg]
+    else: done = cKDTree(_along(S, E, 0.25 * reach)[0]).query(q, workers=-1)[0] <= reach
     far = np.flatnonzero(~done)
     if not len(far): return start, end, parent
     kd = cKDTree(q[far])
@@ -583,7 +658,7 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
 # %% ../nbs/09b_reconstruct.ipynb #cef271e9
 def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 1.0, step: float = 2.0,
                   apart: float = 0.5, apart_diag: float = 0.002, twig_diag: float = 0.002, power: float = 2.0,
-                  smooth: bool = True, cover: float = 1.5, cover_points: int | None = None) -> Tree:
+                  smooth: bool = True, cover: float = 1.5, cover_points: int | None = None, centre: bool = True) -> Tree:
     """A connected skeleton `Tree` (radii not yet measured) of points (n, 3), z up, made of paths through the points.
     - nodes: `entry_nodes` on bins `bin_spacings` point spacings wide of the distance along `hop_tree` (edges cost
       their length to the `power`) of the `k`-neighbour graph;
@@ -593,7 +668,10 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
     - vertices: every `step` spacings of a path and at forks, each (with `smooth`) the median of its node's centre and
       its two neighbours' on the path;
     - `cover_spurs` then reaches the points farther than `cover` spacings (0: none), with `cover_points` a spur at
-      least."""
+      least;
+    - with `centre`, if the stem is three spacings thick or more in the lowest 5 % of the height (a scan dense for
+      its wood), nodes move onto the circles of the rings (`ring_circles`, `onto_rings`), and `cover_spurs` reaches
+      from the bark of segments a spacing thick or more."""
     q = np.asarray(points, np.float64)
     for name, v in (("bin_spacings", bin_spacings), ("twig", twig), ("step", step), ("apart", apart)):
         if not (isinstance(v, (int, float, np.integer, np.floating)) and 0 < v < 1000):
@@ -613,6 +691,11 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
     par = np.where(pred[first] >= 0, node[np.maximum(pred[first], 0)], -1)
     gn = np.bincount(node, geo, m) / cnt
     thick = np.sqrt(np.bincount(node, ((q - cen[node]) ** 2).sum(1), m) / cnt)   # a node's spread about its centre
+    stem = False
+    if centre:   # lanes up a thick stem's bark fall onto its axis, and merge there
+        ring, rc, rr = ring_circles(q, g, root, spacing)
+        stem = bool((rr[rc[:, 2] < q[:, 2].min() + 0.05 * np.ptp(q[:, 2])] >= 3 * spacing).any())
+        if stem: cen, thick = onto_rings(node, cen, thick, ring, rc, rr)
     paths, pp_of = branch_paths(par, gn)
     diag = _diag(q)
     near = max(apart * spacing, apart_diag * diag)
@@ -668,7 +751,7 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
     if not start: raise TreebookError(f"the {len(q)} points make no skeleton: is this a tree scan?")
     if cover:
         start, end, parent = cover_spurs(q, geo, pred, start, end, parent, cover * spacing, step * spacing,
-                                         cover_points)
+                                         cover_points, thick=spacing if stem else 0.0)
     z = np.zeros((len(start), 1))
     return Tree(np.hstack([start, z]).astype(np.float32), np.hstack([end, z]).astype(np.float32), np.array(parent),
                 check=False)
@@ -683,17 +766,8 @@ def segment_radii(tree: Tree, points, min_points: int = 3, return_segment: bool 
     q = np.asarray(points, np.float64)
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
     spacing = float(np.median(cKDTree(q).query(q, 2, workers=-1)[0][:, 1])) if len(q) > 1 else _diag(s)
-    along, own = _along(s, e, max(0.5 * spacing, 1e-12))
-    seg = own[cKDTree(along).query(q, workers=-1)[1]]
-    d = e[seg] - s[seg]
-    u = np.clip(((q - s[seg]) * d).sum(1) / np.maximum((d * d).sum(1), 1e-300), 0, 1)
-    dist = np.linalg.norm(q - s[seg] - u[:, None] * d, axis=1)
-    cnt = np.bincount(seg, minlength=tree.n)
-    x, first = dist[np.lexsort((dist, seg))], np.cumsum(cnt) - cnt   # distances sorted within each segment
-    ok = (cnt >= min_points) & (cnt > 0)
-    r = np.full(tree.n, np.nan)
-    r[ok] = (x[(first + (cnt - 1) // 2)[ok]] + x[(first + cnt // 2)[ok]]) / 2   # the medians
-    par, r = tree.parent, r.tolist()
+    seg, dist = _axis_distances(s, e, q, 0.5 * spacing)
+    par, r = tree.parent, _medians(seg, dist, tree.n, min_points).tolist()
     for i, p in enumerate(par.tolist()):  # parents come first
         if r[i] != r[i]: r[i] = r[p] if p >= 0 else (float(np.nanmedian(r)) if np.isfinite(r).any() else spacing)
         if p >= 0: r[i] = min(r[i], 1.05 * r[p])
