@@ -55,8 +55,10 @@ def test_dataset_needs_no_trimesh(tmp_path):
 
 
 def test_make_species_commands():
-    r = subprocess.run(["make", "-n", "species", "SPECIES=hickory"], cwd=ROOT, capture_output=True, text=True)
-    lines = r.stdout.replace("\\\n", "").splitlines()
+    env = {k: v for k, v in os.environ.items() if k not in ("MAKEFLAGS", "MFLAGS", "MAKELEVEL")}   # under make test too
+    r = subprocess.run(["make", "-n", "--no-print-directory", "species", "SPECIES=hickory"], cwd=ROOT,
+                       capture_output=True, text=True, env=env)
+    lines = [l for l in r.stdout.replace("\\\n", "").splitlines() if not l.startswith("make")]
     assert "-m treebook.species_runs data hickory --trees 10000 --workers 2" in lines[0]
     assert "-m treebook.species_runs train hickory --run runs/hickory --threads 2 --time-limit 6000" in lines[1]
     assert "scripts/ship_elm.py --species hickory --run runs/hickory" in lines[2] and \
