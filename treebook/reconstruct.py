@@ -580,7 +580,7 @@ def ring_circles(points, g, root: int, spacing: float, coarse: int = 120, min_sp
         p = q[o[first[k]:first[k + 1]]]
         c0 = p.mean(0); d = p - c0
         _, V = np.linalg.eigh(d.T @ d)
-        if np.sqrt(2 * np.linalg.eigvalsh(d.T @ d / len(p))[1]) < min_spacings * spacing: continue   # thin: skip
+        if np.sqrt(2 * np.linalg.eigvalsh(d.T @ d / len(p))[1]) < 0.5 * min_spacings * spacing: continue   # thin
         x, y = d @ V[:, 2], d @ V[:, 1]
         sol = np.linalg.lstsq(np.column_stack([x, y, np.ones_like(x)]), x * x + y * y, rcond=None)[0]
         a, bb = sol[0] / 2, sol[1] / 2
