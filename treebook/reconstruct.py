@@ -570,8 +570,7 @@ def ring_circles(points, g, root: int, spacing: float, coarse: int = 120, min_sp
     h = max(_diag(q) / coarse, 2 * spacing)
     b = np.floor(dijkstra(g, indices=root) / h).astype(np.int64)
     gc = g.tocoo(); same = b[gc.row] == b[gc.col]
-    ring = connected_components(coo_matrix((np.ones(same.sum()), (gc.row[same], gc.col[same])), shape=(n, n)),
-                                directed=False)[1]
+    ring = _pieces(n, gc.row[same], gc.col[same])
     m = ring.max() + 1; cnt = np.bincount(ring, minlength=m)
     centre = np.stack([np.bincount(ring, q[:, d], m) for d in range(3)], 1) / cnt[:, None]
     radius = np.zeros(m)
@@ -579,8 +578,8 @@ def ring_circles(points, g, root: int, spacing: float, coarse: int = 120, min_sp
     for k in np.flatnonzero(cnt >= max(min_points, 3)):
         p = q[o[first[k]:first[k + 1]]]
         c0 = p.mean(0); d = p - c0
-        _, V = np.linalg.eigh(d.T @ d)
-        if np.sqrt(2 * np.linalg.eigvalsh(d.T @ d / len(p))[1]) < 0.5 * min_spacings * spacing: continue   # thin
+        w, V = np.linalg.eigh(d.T @ d)   # spreads (times the number of points), least first
+        if np.sqrt(2 * w[1] / len(p)) < 0.5 * min_spacings * spacing: continue   # thin: no circle to fit
         x, y = d @ V[:, 2], d @ V[:, 1]
         sol = np.linalg.lstsq(np.column_stack([x, y, np.ones_like(x)]), x * x + y * y, rcond=None)[0]
         a, bb = sol[0] / 2, sol[1] / 2
