@@ -44,9 +44,10 @@ CONDITIONS = dict(
 )
 
 
-def make_scan(sp, i, cond, seed):
-    "(points (n, 3) in metres, wood mask, reference Tree in metres) of tree `i` of species `sp` in condition `cond`."
-    kw = CONDITIONS[cond]
+def make_scan(sp, i, cond, seed, conditions=CONDITIONS, sides=8):
+    """(points (n, 3) in metres, wood mask, reference Tree in metres) of tree `i` of species `sp` in condition `cond`
+    of `conditions`, its mesh of `sides` sides a ring."""
+    kw = conditions[cond]
     rng = np.random.default_rng(seed)
     cap = SPECIES[sp].max_branches if i % 2 == 0 else max(30, SPECIES[sp].max_branches // 3)
     t = grow(sp, seed=seed, stages=1, max_branches=cap)[-1]
@@ -57,7 +58,8 @@ def make_scan(sp, i, cond, seed):
         s_, e_ = truth.start.copy(), truth.end.copy(); s_[:, 3] *= f; e_[:, 3] *= f
         truth = Tree(s_, e_, truth.parent, check=False)
     n = int(rng.integers(kw["n"][0], kw["n"][1] + 1))
-    sc = scan(truth, n_points=n, views=kw["views"], noise=kw["noise"], outliers=0.0, leaves=kw.get("leaves", False), seed=seed)
+    sc = scan(truth, n_points=n, views=kw["views"], noise=kw["noise"], outliers=0.0, leaves=kw.get("leaves", False), seed=seed,
+              sides=sides)
     p, wood = sc.points.astype(np.float64), ~sc.foliage
     diag = float(np.linalg.norm(np.ptp(p, 0)))
     if "move" in kw:   # a share of the points moved in random directions by up to a fraction of the diagonal
