@@ -30,7 +30,7 @@ def test_folder_with_a_bad_file(treebook_cmd, scans, tmp_path):
     assert r.returncode == 2                                          # one scan failed ...
     assert [l for l in r.stderr.splitlines() if l.startswith("error:")] == [
         l for l in r.stderr.splitlines() if "broken.xyz" in l]        # ... on one line of its own
-    assert sorted(p.name for p in out.iterdir()) == ["tree0.npz", "tree0.obj", "tree1.npz", "tree1.obj"]
+    assert sorted(p.name for p in out.iterdir()) == ["summary.csv", "tree0.npz", "tree0.obj", "tree1.npz", "tree1.obj"]
     assert "2 reconstructed, 0 already there, 1 failed, of 3 scans" in r.stdout
     for i in range(2): assert Tree.load(out / f"tree{i}.npz").n > 10
     again = run(treebook_cmd, "reconstruct", scans, "--out", out, "--mesh", "obj", "--method", "classic")

@@ -17,9 +17,10 @@ from pathlib import Path
 from .tree import TreebookError, all_or_nothing, can_write_in, flag_number, out_folder
 
 # %% auto #0
-__all__ = ['MAX_SAMPLES', 'DEMO_STEPS', 'save_image', 'cmd_info', 'cmd_export', 'cmd_render', 'cmd_generate', 'write_trees',
-           'cmd_grammar', 'cmd_enhance', 'cmd_propagate', 'cmd_reconstruct', 'cmd_train', 'cmd_sample', 'cmd_grow',
-           'cmd_complete', 'demo_step', 'cmd_demo', 'build_parser', 'main']
+__all__ = ['SUMMARY_COLUMNS', 'MAX_SAMPLES', 'DEMO_STEPS', 'save_image', 'cmd_info', 'cmd_export', 'cmd_render', 'cmd_generate',
+           'write_trees', 'cmd_grammar', 'cmd_enhance', 'cmd_propagate', 'reconstruct_scan', 'dask_client', 'run_batch',
+           'read_summary', 'write_summary', 'cmd_reconstruct', 'cmd_train', 'cmd_sample', 'cmd_grow', 'cmd_complete',
+           'demo_step', 'cmd_demo', 'build_parser', 'main']
 
 # %% ../nbs/11_cli.ipynb #55470e73
 class _Parser(argparse.ArgumentParser):
@@ -167,31 +168,73 @@ def cmd_propagate(args):
     for p in write_trees(trees, args.out, "propagated", picture=args.render, seed=args.seed): print(f"wrote {p}")
     return 0
 
+# %% ../nbs/11_cli.ipynb #5c1f0a11
+SUMMARY_COLUMNS = ("scan", "tree", "file", "branches", "tips", "height", "length", "max_radius", "coverage",
+                   "points")
+
+# %% ../nbs/11_cli.ipynb #5c1f0a13
+def _summary_rows(name: str, points, trees) -> list:
+    "The `SUMMARY_COLUMNS` (all but `file`) of each of the `trees` made from one scan's `points`."
+    from treebook.reconstruct import tree_coverage
+    info = [t.info() for t in trees]
+    return [dict(scan=name, tree=k, branches=i["branches"], tips=i["leaves"], height=float(i["height"]),
+                 length=i["total_length"], max_radius=i["max_radius"], coverage=tree_coverage(points, [t]),
+                 points=len(points)) for k, (t, i) in enumerate(zip(trees, info), 1)]
+
+# %% ../nbs/11_cli.ipynb #5c1f0a14
+def reconstruct_scan(name: str, points, options: dict) -> dict:
+    """The trees of one scan, `name`, from its `points` (read by the caller) by `reconstruct(points, **options)`, as a
+    picklable dict: `trees` (a list), `rows` (`_summary_rows`), the scan's `coverage` by all its trees, `seconds`,
+    `method`, and the `warnings` raised, as (category, message) pairs. It reads and writes no file, so it runs as well
+    in a worker process, or on a dask worker on another machine, as here."""
+    from treebook.reconstruct import reconstruct, tree_coverage
+    t0 = time.time()
+    with warnings.catch_warnings(record=True) as said:   # shown by the process that writes the files
+        warnings.simplefilter("always")
+        made = reconstruct(points, **options)
+        seconds = time.time() - t0
+        made = made if options.get("trees") == "all" else [made]
+        rows = _summary_rows(name, points, made)
+        coverage = rows[0]["coverage"] if len(made) == 1 else tree_coverage(points, made)
+    return dict(name=name, trees=made, rows=rows, seconds=seconds, method=options.get("method", "paths"),
+                coverage=coverage, warnings=[(w.category, str(w.message)) for w in said])
+
+# %% ../nbs/11_cli.ipynb #5c1f0a18
+def _write_scan(result, out, mesh_out=None, skel_out=None, numbered=False, named=False) -> list:
+    """Write one `reconstruct_scan` result, in this process: its trees to `out` (OUT_1, OUT_2 ... when `numbered`), with
+    meshes and skeletons, all or none; show its warnings (after the scan's name when `named`) and what was made.
+    Returns its summary rows, each with its tree file's name."""
+    from treebook.mesh import export_mesh, export_skeleton
+    made, n = result["trees"], len(result["trees"])
+    for category, message in result["warnings"]:
+        warnings.warn(f"{result['name']}: {message}" if named else message, category)
+    print(f"reconstructed {n} tree{'s' if n > 1 else ''} ({', '.join(str(t.n) for t in made)} branches) with "
+          f"{result['method']} in {result['seconds']:.1f} s")
+    print(f"the mesh{'es' if n > 1 else ''} pass{'' if n > 1 else 'es'} within 1% of the scan's diagonal of "
+          f"{result['coverage']:.1%} of its {result['rows'][0]['points']:,} points")
+    # --trees all: tree_1.npz, tree_2.npz ...
+    num = (lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}")) if numbered else (lambda p, i: p)
+    wrote, rows = [], []
+    with all_or_nothing():   # the trees, meshes and skeletons: all of them, or (if one cannot be written) none
+        for i, (tree, row) in enumerate(zip(made, result["rows"])):   # meshes in the scan's coordinates
+            wrote.append(tree.save(num(out, i)))
+            rows.append({**row, "file": wrote[-1].name})
+            if mesh_out: wrote.append(export_mesh(tree, num(mesh_out, i), sides=12))
+            if skel_out: wrote.append(export_skeleton(tree, num(skel_out, i)))
+    for p in wrote: print(f"wrote {p}")
+    return rows
+
+# %% ../nbs/11_cli.ipynb #5c1f0a19
+def _reconstruct_options(args) -> dict:
+    "`reconstruct`'s keyword arguments from the flags of `treebook reconstruct`: plain values, for any worker."
+    return dict(method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
+
 # %% ../nbs/11_cli.ipynb #44c140ad
 def _reconstruct_one(scan, out, mesh_out, skel_out, args) -> list:
-    "Reconstruct one scan and write its tree (and mesh and skeleton); the paths written."
-    from treebook.reconstruct import reconstruct, tree_coverage
+    "One scan, here: read, reconstructed (`reconstruct_scan`) and written (`_write_scan`); its summary rows."
     from treebook.pointio import read_points
-    from treebook.mesh import export_mesh, export_skeleton
-    t0 = time.time()
-    pts = read_points(scan, up=args.up)
-    made = reconstruct(pts, method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees,
-                       radii=args.radii)
-    made = made if args.trees == "all" else [made]
-    print(f"reconstructed {len(made)} tree{'s' if len(made) > 1 else ''} ({', '.join(str(t.n) for t in made)} "
-          f"branches) with {args.method} in {time.time() - t0:.1f} s")
-    print(f"the mesh{'es' if len(made) > 1 else ''} pass{'' if len(made) > 1 else 'es'} within 1% of the scan's "
-          f"diagonal of {tree_coverage(pts, made):.1%} of its {len(pts):,} points")
-    # --trees all: tree_1.npz, tree_2.npz ...
-    numbered = lambda p, i: p.with_name(f"{p.stem}_{i + 1}{p.suffix}") if args.trees == "all" else p
-    wrote = []
-    with all_or_nothing():   # the tree, the mesh and the skeleton: all of them, or (if one cannot be written) none
-        for i, tree in enumerate(made):   # meshes in the scan's coordinates (export_mesh adds the origin back)
-            wrote.append(tree.save(numbered(out, i)))
-            if mesh_out: wrote.append(export_mesh(tree, numbered(mesh_out, i), sides=12))
-            if skel_out: wrote.append(export_skeleton(tree, numbered(skel_out, i)))
-    return wrote
-
+    result = reconstruct_scan(scan.name, read_points(scan, up=args.up), _reconstruct_options(args))
+    return _write_scan(result, out, mesh_out, skel_out, numbered=args.trees == "all")
 
 # %% ../nbs/11_cli.ipynb #04b06df0
 def _batch_format(value: str, ok: tuple, what: str) -> str:
@@ -220,44 +263,244 @@ def _scan_files(names) -> list:
     return files
 
 
+# %% ../nbs/11_cli.ipynb #7b2e0c02
+def _settled(fn, *args):
+    "A finished `Future` of `fn(*args)`: its value, or the `TreebookError` it raised (any other error goes up at once)."
+    from concurrent.futures import Future
+    fut = Future()
+    try: fut.set_result(fn(*args))
+    except TreebookError as e: fut.set_exception(e)
+    return fut
+
+# %% ../nbs/11_cli.ipynb #7b2e0c03
+def _worker_died(*_):
+    "The outcome of a job whose worker process died."
+    raise TreebookError("its worker process died (a crash in a library, or no memory left); the other scans went on")
+
+# %% ../nbs/11_cli.ipynb #7b2e0c04
+def _auto_workers(workers: int, jobs: int) -> int:
+    "`--workers`: as given, or for 0 as many as there are cores, at most 4 (each holds a scan); never more than `jobs`."
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(workers or min(cores, 4), jobs))
+
+# %% ../nbs/11_cli.ipynb #7b2e0c05
+def _here(jobs, work, options):
+    "Run the jobs, (file, `Future` of what was read) pairs, one after another in this process."
+    for f, got in jobs: yield f, got if got.exception() else _settled(work, f.name, got.result(), options)
+
+# %% ../nbs/11_cli.ipynb #7b2e0c06
+def _pool_context(preload=()):
+    """How worker processes start: forkserver where there is one (its server imports `preload` once and each worker
+    forks from it: a pool of 2 or 4 was ready in 0.6 s on 2 cores, where spawn, which imports everything in each
+    worker, took 0.7-1.4 s for 2 and 1.3-3.1 s for 4), else spawn; never a fork of this process, whose threads torch
+    and open3d may hold."""
+    import multiprocessing as mp
+    if "forkserver" not in mp.get_all_start_methods(): return mp.get_context("spawn")
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(list(preload))
+    return ctx
+
+# %% ../nbs/11_cli.ipynb #7b2e0c07
+def _in_processes(jobs, work, options, workers: int, preload=()):
+    """Run the jobs in `workers` processes, two each in flight, yielding each as it completes. A worker that dies (a
+    crash in a library, no memory left) breaks the pool: the jobs it held are run again one at a time in a pool of
+    one, so that the one that kills its worker fails alone and the others go on."""
+    import signal
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
+    ctx, jobs, held, running, pool, alone = _pool_context(preload), iter(jobs), [], {}, None, False
+    try:
+        while True:
+            if pool is None or (alone and not held and not running):   # new, after a crash, or back to all workers
+                if pool: pool.shutdown()
+                alone = bool(held)
+                pool = ProcessPoolExecutor(1 if alone else workers, mp_context=ctx, initializer=signal.signal,
+                                           initargs=(signal.SIGINT, signal.SIG_DFL))   # Ctrl-C: ended, quietly
+            broken = False
+            while not broken and len(running) < (1 if alone else 2 * workers):
+                if alone and not held: break
+                f, got = held.pop(0) if alone else next(jobs, (None, None))
+                if f is None: break
+                if not alone and got.exception(): yield f, got; continue
+                data = got if alone else got.result()
+                try: running[pool.submit(work, f.name, data, options)] = f, data
+                except BrokenProcessPool: held.insert(0, (f, data)); broken = True
+            if running:
+                first = next(iter(wait(running, return_when=FIRST_COMPLETED).done))
+                if not isinstance(first.exception(), BrokenProcessPool):
+                    yield running.pop(first)[0], first; continue
+                wait(running)   # a dead worker fails all the pool's jobs at once
+                for fut, (f, data) in list(running.items()):
+                    if not isinstance(fut.exception(), BrokenProcessPool): yield f, fut
+                    elif alone: yield f, _settled(_worker_died)
+                    else: held.append((f, data))
+                running.clear(); broken = True
+            if broken: pool.shutdown(wait=False); pool = None
+            elif not running: return
+    finally:
+        if pool: pool.shutdown(wait=False, cancel_futures=True)
+
+# %% ../nbs/11_cli.ipynb #7b2e0c08
+def dask_client(address: str, timeout: float = 10):
+    """A `distributed.Client` of the dask cluster whose scheduler is at `address` (tcp://HOST:8786), or a one-line
+    `TreebookError`: `distributed` not installed, a bad address, or no scheduler there within `timeout` seconds."""
+    import socket
+    try: from distributed import Client
+    except ImportError:
+        raise TreebookError("--scheduler needs dask's distributed package: pip install distributed") from None
+    from distributed.comm.addressing import parse_address, parse_host_port
+    try:
+        scheme, where = parse_address(address)
+        if scheme == "tcp":   # no one there: said at once, not after the timeout
+            socket.create_connection(parse_host_port(where, 8786), timeout=timeout).close()
+        return Client(address, timeout=timeout, set_as_default=False)
+    except Exception as e:
+        why = e.strerror.lower() if isinstance(e, OSError) and e.strerror else " ".join(str(e).split())
+        raise TreebookError(f"cannot reach the dask scheduler at {address}: {why}") from None
+
+# %% ../nbs/11_cli.ipynb #7b2e0c0a
+def _on_dask(jobs, work, options, client):
+    """Run the jobs on the dask cluster of `client`, two per worker thread in flight, yielding each as it completes.
+    What was read goes to the workers with its job (`scatter`), so they need no shared disk; a job whose workers kept
+    dying (dask tries it on three) fails alone."""
+    from distributed import KilledWorker, as_completed
+    slots, jobs, running = 2 * max(1, sum(client.nthreads().values())), iter(jobs), {}
+    done = as_completed(loop=client.loop)
+    try:
+        while True:
+            while len(running) < slots:
+                f, got = next(jobs, (None, None))
+                if f is None: break
+                if got.exception(): yield f, got; continue
+                data = client.scatter([got.result()], hash=False)[0]
+                fut = client.submit(work, f.name, data, options, pure=False)
+                running[fut] = f, data; done.add(fut)
+            if not running: return
+            fut = next(done)
+            f, _ = running.pop(fut)
+            yield f, _settled(_worker_died) if isinstance(fut.exception(), KilledWorker) else fut
+    finally:
+        if running: client.cancel(list(running))
+
+# %% ../nbs/11_cli.ipynb #7b2e0c0b
+def run_batch(files, work, options, write, done=None, read=None, desc: str = "scans", verb: str = "done",
+              workers: int = 0, scheduler=None, preload=()) -> int:
+    """For each of `files` not `done(f)`: `read(f)` here (default: the path itself), `work(f.name, what was read,
+    options)` in this process (`workers` 1), in worker processes (`workers` more; 0: as many as cores, at most 4) or on
+    the dask cluster `scheduler` (a `Client`, or an address: `dask_client` first refuses a bad one before anything is
+    made), and `write(f, result)` here as each result comes in.
+    `work` must be a module-level function and `options` plain values, to travel by pickle; `preload` names the modules
+    the workers import before the first job. A `TreebookError` of one file (or the death of its worker) is one line,
+    `error: NAME: ...`, and the rest go on; a progress bar counts the files, a last line tallies them. Returns the exit
+    status: 2 if any file failed, else 0."""
+    from tqdm.auto import tqdm
+    files = list(files)
+    todo = [f for f in files if not (done and done(f))]
+    client = dask_client(scheduler) if isinstance(scheduler, str) else scheduler
+    n = _auto_workers(workers, len(todo))
+    jobs = ((f, _settled(read or (lambda p: p), f)) for f in todo)   # read when a job is sent, not all at first
+    runner = (_on_dask(jobs, work, options, client) if client is not None else
+              _in_processes(jobs, work, options, n, preload) if n > 1 else _here(jobs, work, options))
+    made = failed = 0
+    try:
+        with contextlib.closing(runner), tqdm(total=len(files), initial=len(files) - len(todo), desc=desc,
+                                              unit=desc.removesuffix("s"), disable=None) as bar:
+            for f, got in runner:
+                try: write(f, got.result()); made += 1
+                except TreebookError as e:
+                    failed += 1
+                    print(f"error: {f.name}: {' '.join(str(e).split())}", file=sys.stderr)
+                bar.update()
+    finally:
+        if client is not None and client is not scheduler: client.close()
+    print(f"{made} {verb}, {len(files) - len(todo)} already there, {failed} failed, of {len(files)} {desc}")
+    return 2 if failed else 0
+
+# %% ../nbs/11_cli.ipynb #7b2e0c0f
+def read_summary(path) -> list:
+    "The rows (dicts of strings) of the summary CSV at `path` whose `file` is still beside it; none if there is no CSV."
+    import csv
+    p = Path(path)
+    if not p.is_file(): return []
+    with open(p, newline="", encoding="utf-8") as f: rows = list(csv.DictReader(f))
+    return [r for r in rows if r.get("file") and (p.parent / r["file"]).is_file()]
+
+# %% ../nbs/11_cli.ipynb #7b2e0c10
+def write_summary(path, rows, columns=SUMMARY_COLUMNS) -> Path:
+    "Write `rows` (dicts) to the CSV `path`, atomically: the `columns`, sorted by scan and tree; floats to 6 digits."
+    import csv, io
+    from treebook.tree import _atomic_write
+    text = io.StringIO()
+    w = csv.DictWriter(text, columns, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for r in sorted(rows, key=lambda r: (str(r["scan"]), int(r["tree"]))):
+        w.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in r.items()})
+    return _atomic_write(Path(path), lambda f: f.write(text.getvalue().encode()))
+
+# %% ../nbs/11_cli.ipynb #7b2e0c13
+def _tree_files(folder: Path, stem: str) -> list:
+    "The tree files of the scan `stem` in a batch's `folder`: STEM.npz, or STEM_1.npz, STEM_2.npz ... (`--trees all`)."
+    if (folder / f"{stem}.npz").exists(): return [folder / f"{stem}.npz"]
+    found = []
+    while (p := folder / f"{stem}_{len(found) + 1}.npz").exists(): found.append(p)
+    return found
+
+# %% ../nbs/11_cli.ipynb #7b2e0c14
+def _done_rows(folder: Path, files, up: str) -> dict:
+    """The summary rows of the scans done before, by scan: read back from `summary.csv`, or, for trees made without
+    one, made again from the trees and the scan."""
+    from treebook.pointio import read_points
+    from treebook.tree import Tree
+    rows = {}
+    for r in read_summary(folder / "summary.csv"): rows.setdefault(Path(r["scan"]).stem, []).append(r)
+    for f in files:
+        made = _tree_files(folder, f.stem)
+        if not made or f.stem in rows: continue
+        try: again = _summary_rows(f.name, read_points(f, up=up), [Tree.load(p) for p in made])
+        except TreebookError as e: warnings.warn(f"{f.name}: no summary row for its trees ({e})"); continue
+        rows[f.stem] = [{**r, "file": p.name} for r, p in zip(again, made)]
+    return rows
+
 # %% ../nbs/11_cli.ipynb #2d574f91
 def _reconstruct_batch(args) -> int:
-    """Many scans in one process (the start-up is paid once): a tree (and mesh, skeleton) per scan in the folder
-    `--out`; a scan whose tree is there already is skipped, one that fails is reported on one line and the rest go on."""
-    from tqdm.auto import tqdm
+    """Many scans, a tree (and mesh, skeleton) each in the folder `--out`, by `run_batch`: in this process, in worker
+    processes (`--workers`) or on a dask cluster (`--scheduler`); then `summary.csv`, a row per tree made so far."""
+    from treebook.pointio import read_points
+    from treebook.cli import reconstruct_scan   # the package's own, which a worker imports (a notebook's it cannot)
     fmt = lambda v, ok, what: None if v is None else _batch_format(v, ok, what)
     mesh_fmt, skel_fmt = fmt(args.mesh, (".obj", ".glb", ".ply"), "--mesh"), fmt(args.skeleton, (".ply",), "--skeleton")
     files = _scan_files(args.scan)
     folder, _ = out_folder(args.out)
     if Path(args.out).suffix.lower() in (".npz", ".json"):
         raise TreebookError(f"several scans write one tree each into a folder: --out {args.out} names a file")
+    client = dask_client(args.scheduler) if args.scheduler else None   # refused before the folder is made
     folder.mkdir(parents=True, exist_ok=True)
-    done = failed = 0
-    for f in tqdm(files, desc="scans", unit="scan", disable=None):
-        out = folder / f"{f.stem}.npz"
-        if out.exists() or (folder / f"{f.stem}_1.npz").exists(): done += 1; continue
-        try:
-            wrote = _reconstruct_one(f, out, mesh_fmt and out.with_suffix(mesh_fmt),
-                                     skel_fmt and out.with_name(f"{f.stem}_skeleton.ply"), args)
-            for p in wrote: print(f"wrote {p}")
-        except TreebookError as e:
-            failed += 1
-            print(f"error: {f.name}: {e}", file=sys.stderr)
-    print(f"{len(files) - done - failed} reconstructed, {done} already there, {failed} failed, of {len(files)} scans")
-    return 2 if failed else 0
+    rows = _done_rows(folder, files, args.up)
 
+    def write(f, result):
+        out = folder / f"{f.stem}.npz"
+        rows[f.stem] = _write_scan(result, out, mesh_fmt and out.with_suffix(mesh_fmt),
+                                   skel_fmt and out.with_name(f"{f.stem}_skeleton.ply"), args.trees == "all", True)
+    try:
+        return run_batch(files, reconstruct_scan, _reconstruct_options(args), write,
+                         done=lambda f: bool(_tree_files(folder, f.stem)), read=lambda f: read_points(f, up=args.up),
+                         verb="reconstructed", workers=args.workers, scheduler=client, preload=["treebook.reconstruct"])
+    finally:
+        if client is not None: client.close()
+        write_summary(folder / "summary.csv", [r for made in rows.values() for r in made])
 
 # %% ../nbs/11_cli.ipynb #4e5dd515
 def cmd_reconstruct(args):
-    "One scan to `--out FILE`; several scans or a folder to `--out FOLDER`, one tree each, in one process."
+    "One scan to `--out FILE`; several scans or a folder to `--out FOLDER`, one tree each (`run_batch`)."
     if len(args.scan) == 1 and not Path(args.scan[0]).is_dir():
+        if args.scheduler:
+            raise TreebookError("--scheduler runs several scans (a folder --out); one scan is reconstructed here")
         out = _out_path(args.out, (".npz", ".json"), "the tree file")
         mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
         skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
-        for p in _reconstruct_one(Path(args.scan[0]), out, mesh_out, skel_out, args): print(f"wrote {p}")
+        _reconstruct_one(Path(args.scan[0]), out, mesh_out, skel_out, args)
         return 0
     return _reconstruct_batch(args)
-
 
 # %% ../nbs/11_cli.ipynb #45436cc7
 def cmd_train(args):
@@ -548,9 +791,11 @@ def _add_reconstruct(sub):
     s = sub.add_parser("reconstruct", help="reconstruct a tree from a scan",
                        description="Decompose a scan into branches and junctions (TreePartNet) or trace a geodesic "
                        "skeleton (classic), then join one connected tree in the scan's frame and units (one per stem "
-                       "with --trees).")
+                       "with --trees). Several scans, or a folder, make a tree each in the folder --out, in worker "
+                       "processes or on a dask cluster, with summary.csv: a row per tree (columns "
+                       f"{', '.join(SUMMARY_COLUMNS)}).")
     s.add_argument("scan", nargs="+", help="point cloud: .xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57 or "
-                   ".npy; several, or a folder, are done one after another in one process")
+                   ".npy; several, or a folder, make a tree each (see --workers); done ones are skipped")
     s.add_argument("--out", required=True, help="tree file (.npz or .json); a folder for several scans")
     s.add_argument("--mesh", help="also write the mesh (.obj, .glb or .ply); for several scans a format (obj, glb, ply)")
     s.add_argument("--skeleton", help="also write the skeleton (.ply with radius per vertex and edges; for several "
@@ -567,6 +812,13 @@ def _add_reconstruct(sub):
                    help="when the scan seems to hold several trees: join them into one (default, with a warning), keep "
                    "the largest, or write all (OUT_1, OUT_2 ...)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
+    where = s.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=flag_number(int, 0, 256), default=0,
+                       help="several scans: worker processes (default: 0, as many as cores and scans, at most 4; 1: "
+                       "one after another in this process); the trees are the same whatever the number")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="several scans on the dask.distributed cluster at ADDRESS (tcp://HOST:8786; needs pip "
+                       "install distributed): the points go to its workers, the files are written here")
     s.set_defaults(func=cmd_reconstruct)
 
 # %% ../nbs/11_cli.ipynb #cf823b5d
