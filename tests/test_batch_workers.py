@@ -11,9 +11,10 @@ import pytest
 from test_reconstruct_batch import run, scans  # noqa: F401 (the fixture: two scans of trees and a broken file)
 
 from treebook.cli import dask_client, run_batch
+from treebook.pointio import read_fields, read_points, write_points
 from treebook.tree import Tree, TreebookError
 
-MADE = ["summary.csv"] + [f"tree{i}.{s}" for i in range(2) for s in ("npz", "obj")]
+MADE = ["summary.csv"] + [f"tree{i}{s}" for i in range(2) for s in (".npz", ".obj", "_labels.ply")]
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +28,8 @@ def plot(scans, tmp_path_factory):
 
 
 def batch(treebook_cmd, plot, out, *how, made=2):
-    r = run(treebook_cmd, "reconstruct", plot, "--out", out, "--method", "classic", "--mesh", "obj", *how)
+    r = run(treebook_cmd, "reconstruct", plot, "--out", out, "--method", "classic", "--mesh", "obj", "--labels", "ply",
+            *how)
     assert r.returncode == 2, r.stderr
     errors = [l for l in r.stderr.splitlines() if l.startswith("error:")]
     assert sorted(l.split(":")[1].strip() for l in errors) == ["broken.xyz", "flat.xyz"], r.stderr
@@ -79,6 +81,17 @@ def test_no_scheduler_is_one_line(treebook_cmd, plot, tmp_path):
 def test_no_distributed_says_what_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)   # as if not installed
     with pytest.raises(TreebookError, match="pip install distributed"): dask_client("tcp://127.0.0.1:8786")
+
+
+def test_labels_follow_a_las_scan(treebook_cmd, scans, tmp_path):
+    write_points(tmp_path / "s.las", read_points(scans / "tree0.xyz"), scale=0.0001)
+    r = run(treebook_cmd, "reconstruct", tmp_path / "s.las", "--method", "classic", "--labels", "las",
+            "--out", tmp_path / "t.npz")
+    assert r.returncode == 0, r.stderr
+    got, n = read_fields(tmp_path / "t_labels.las"), Tree.load(tmp_path / "t.npz").n
+    assert np.array_equal(read_points(tmp_path / "t_labels.las"), read_points(tmp_path / "s.las"))   # same points, scale
+    assert sorted(got) == ["segment", "tree"] and np.array_equal(got["tree"] == 1, got["segment"] >= 0)
+    assert got["segment"].max() < n and (got["segment"] >= 0).mean() > 0.9
 
 
 def crash_on_b(name, data, options):

@@ -185,26 +185,47 @@ def _summary_rows(name: str, points, trees) -> list:
 def reconstruct_scan(name: str, points, options: dict) -> dict:
     """The trees of one scan, `name`, from its `points` (read by the caller) by `reconstruct(points, **options)`, as a
     picklable dict: `trees` (a list), `rows` (`_summary_rows`), the scan's `coverage` by all its trees, `seconds`,
-    `method`, and the `warnings` raised, as (category, message) pairs. It reads and writes no file, so it runs as well
-    in a worker process, or on a dask worker on another machine, as here."""
+    `method`, the `warnings` raised, as (category, message) pairs, and with `return_info` among the options `labels`
+    (`_scan_labels`). It reads and writes no file, so it runs as well in a worker process, or on a dask worker on
+    another machine, as here."""
     from treebook.reconstruct import reconstruct, tree_coverage
     t0 = time.time()
     with warnings.catch_warnings(record=True) as said:   # shown by the process that writes the files
         warnings.simplefilter("always")
         made = reconstruct(points, **options)
         seconds = time.time() - t0
-        made = made if options.get("trees") == "all" else [made]
+        made, infos = made if options.get("trees") == "all" else [made], None
+        if options.get("return_info"): made, infos = [m[0] for m in made], [m[1] for m in made]
         rows = _summary_rows(name, points, made)
         coverage = rows[0]["coverage"] if len(made) == 1 else tree_coverage(points, made)
     return dict(name=name, trees=made, rows=rows, seconds=seconds, method=options.get("method", "paths"),
-                coverage=coverage, warnings=[(w.category, str(w.message)) for w in said])
+                coverage=coverage, warnings=[(w.category, str(w.message)) for w in said],
+                labels=None if infos is None else _scan_labels(infos, len(points)))
+
+# %% ../nbs/11_cli.ipynb #6e3a1b01
+def _scan_labels(infos, n: int) -> dict:
+    """Per point of a scan of `n` points, from the `reconstruct(..., return_info=True)` dicts of its trees: `tree`, the
+    number of the first tree (largest first) whose segments reach the point (0 for none), and `segment`, its branch in
+    that tree (-1 for none)."""
+    import numpy as np
+    tree, segment = np.zeros(n, np.int32), np.full(n, -1, np.int32)
+    for k, info in enumerate(infos, 1):
+        take = (info["labels_full"] >= 0) & (tree == 0)
+        tree[take], segment[take] = k, info["labels_full"][take]
+    return dict(tree=tree, segment=segment)
+
+# %% ../nbs/11_cli.ipynb #6e3a1b04
+def _labels_path(out: Path, fmt: str) -> Path:
+    "Where `--labels FORMAT` writes the labelled points of the scan whose tree file is `out`: OUT_labels.FORMAT."
+    return out.with_name(f"{out.stem}_labels.{fmt}")
 
 # %% ../nbs/11_cli.ipynb #5c1f0a18
-def _write_scan(result, out, mesh_out=None, skel_out=None, numbered=False, named=False) -> list:
+def _write_scan(result, out, mesh_out=None, skel_out=None, numbered=False, named=False, labels=None) -> list:
     """Write one `reconstruct_scan` result, in this process: its trees to `out` (OUT_1, OUT_2 ... when `numbered`), with
-    meshes and skeletons, all or none; show its warnings (after the scan's name when `named`) and what was made.
-    Returns its summary rows, each with its tree file's name."""
+    meshes and skeletons, and with `labels`, (path, scan), the scan's points and their labels, all or none; show its
+    warnings (after the scan's name when `named`) and what was made. Returns its summary rows, with the files' names."""
     from treebook.mesh import export_mesh, export_skeleton
+    from treebook.pointio import read_points, write_points
     made, n = result["trees"], len(result["trees"])
     for category, message in result["warnings"]:
         warnings.warn(f"{result['name']}: {message}" if named else message, category)
@@ -221,20 +242,26 @@ def _write_scan(result, out, mesh_out=None, skel_out=None, numbered=False, named
             rows.append({**row, "file": wrote[-1].name})
             if mesh_out: wrote.append(export_mesh(tree, num(mesh_out, i), sides=12))
             if skel_out: wrote.append(export_skeleton(tree, num(skel_out, i)))
+        if labels:   # read again: the points as the file has them (whatever --up), after the header of a LAS/LAZ
+            path, scan = labels
+            like = scan if scan.suffix.lower() in (".las", ".laz") else None
+            wrote.append(write_points(path, read_points(scan), result["labels"], like=like))
     for p in wrote: print(f"wrote {p}")
     return rows
 
 # %% ../nbs/11_cli.ipynb #5c1f0a19
 def _reconstruct_options(args) -> dict:
     "`reconstruct`'s keyword arguments from the flags of `treebook reconstruct`: plain values, for any worker."
-    return dict(method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii)
+    return dict(method=args.method, foliage=args.foliage, seed=args.seed, trees=args.trees, radii=args.radii,
+                return_info=bool(args.labels))
 
 # %% ../nbs/11_cli.ipynb #44c140ad
 def _reconstruct_one(scan, out, mesh_out, skel_out, args) -> list:
     "One scan, here: read, reconstructed (`reconstruct_scan`) and written (`_write_scan`); its summary rows."
     from treebook.pointio import read_points
     result = reconstruct_scan(scan.name, read_points(scan, up=args.up), _reconstruct_options(args))
-    return _write_scan(result, out, mesh_out, skel_out, numbered=args.trees == "all")
+    return _write_scan(result, out, mesh_out, skel_out, numbered=args.trees == "all",
+                       labels=args.labels and (_labels_path(out, args.labels), scan))
 
 # %% ../nbs/11_cli.ipynb #04b06df0
 def _batch_format(value: str, ok: tuple, what: str) -> str:
@@ -480,7 +507,8 @@ def _reconstruct_batch(args) -> int:
     def write(f, result):
         out = folder / f"{f.stem}.npz"
         rows[f.stem] = _write_scan(result, out, mesh_fmt and out.with_suffix(mesh_fmt),
-                                   skel_fmt and out.with_name(f"{f.stem}_skeleton.ply"), args.trees == "all", True)
+                                   skel_fmt and out.with_name(f"{f.stem}_skeleton.ply"), args.trees == "all", True,
+                                   args.labels and (_labels_path(out, args.labels), f))
     try:
         return run_batch(files, reconstruct_scan, _reconstruct_options(args), write,
                          done=lambda f: bool(_tree_files(folder, f.stem)), read=lambda f: read_points(f, up=args.up),
@@ -498,6 +526,7 @@ def cmd_reconstruct(args):
         out = _out_path(args.out, (".npz", ".json"), "the tree file")
         mesh_out = _out_path(args.mesh, (".obj", ".glb", ".ply"), "--mesh") if args.mesh else None
         skel_out = _out_path(args.skeleton, (".ply",), "--skeleton") if args.skeleton else None
+        if args.labels: _out_path(_labels_path(out, args.labels), (f".{args.labels}",), "--labels")
         _reconstruct_one(Path(args.scan[0]), out, mesh_out, skel_out, args)
         return 0
     return _reconstruct_batch(args)
@@ -811,6 +840,10 @@ def _add_reconstruct(sub):
     s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
                    help="when the scan seems to hold several trees: join them into one (default, with a warning), keep "
                    "the largest, or write all (OUT_1, OUT_2 ...)")
+    s.add_argument("--labels", metavar="FORMAT", choices=["las", "laz", "ply"],
+                   help="also write the scan's points with two fields as OUT_labels.FORMAT (las, laz or ply; a LAS/LAZ "
+                   "scan's header is followed): tree, the number of the tree a point is part of (0: none), and "
+                   "segment, its branch in that tree's file (-1: none)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     where = s.add_mutually_exclusive_group()
     where.add_argument("--workers", type=flag_number(int, 0, 256), default=0,
