@@ -19,8 +19,8 @@ from .tree import TreebookError, all_or_nothing, can_write_in, flag_number, out_
 # %% auto #0
 __all__ = ['SUMMARY_COLUMNS', 'MAX_SAMPLES', 'DEMO_STEPS', 'save_image', 'cmd_info', 'cmd_export', 'cmd_render', 'cmd_generate',
            'write_trees', 'cmd_grammar', 'cmd_enhance', 'cmd_propagate', 'reconstruct_scan', 'dask_client', 'run_batch',
-           'read_summary', 'write_summary', 'cmd_reconstruct', 'cmd_train', 'cmd_sample', 'cmd_grow', 'cmd_complete',
-           'demo_step', 'cmd_demo', 'build_parser', 'main']
+           'read_summary', 'write_summary', 'cmd_reconstruct', 'qsm_scan', 'cmd_qsm', 'cmd_train', 'cmd_sample',
+           'cmd_grow', 'cmd_complete', 'demo_step', 'cmd_demo', 'build_parser', 'main']
 
 # %% ../nbs/11_cli.ipynb #55470e73
 class _Parser(argparse.ArgumentParser):
@@ -531,6 +531,75 @@ def cmd_reconstruct(args):
         return 0
     return _reconstruct_batch(args)
 
+# %% ../nbs/11_cli.ipynb #41600c7d
+def qsm_scan(name: str, points, options: dict) -> dict:
+    """The measured trees of one scan, `name`, from its `points` by `treebook.qsm.qsm(points, **options)`, as a
+    picklable dict: `tables` (a `qsm_tables` per tree), `labels` (per point: tree, branch, cylinder), `seconds` and the
+    `warnings` raised. It reads and writes no file (see `reconstruct_scan`)."""
+    import numpy as np
+    from treebook.qsm import qsm, qsm_tables, qsm_labels
+    t0 = time.time()
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        made = qsm(points, name=Path(name).stem, **options)
+        made = made if options.get("trees") == "all" else [made]
+    labels = dict(tree=np.zeros(len(points), np.int32), branch=np.zeros(len(points), np.int32),
+                  cylinder=np.zeros(len(points), np.int32))
+    for k, q in enumerate(made, 1):   # a point reached by two trees stays with the larger (the first)
+        lab = qsm_labels(q); take = (lab["cylinder"] > 0) & (labels["tree"] == 0)
+        labels["tree"][take] = k
+        for f in ("branch", "cylinder"): labels[f][take] = lab[f][take]
+    return dict(name=name, tables=[qsm_tables(q) for q in made], labels=labels, seconds=time.time() - t0,
+                warnings=[(w.category, str(w.message)) for w in said])
+
+# %% ../nbs/11_cli.ipynb #3f71c47a
+def _qsm_stems(folder: Path, stem: str) -> list:
+    "The trees measured from the scan `stem` in `folder`: STEM, or STEM_1, STEM_2 ... (`--trees all`)."
+    if (folder / f"{stem}_summary.json").exists(): return [stem]
+    found = []
+    while (folder / f"{stem}_{len(found) + 1}_summary.json").exists(): found.append(f"{stem}_{len(found) + 1}")
+    return found
+
+# %% ../nbs/11_cli.ipynb #0536fe0f
+def cmd_qsm(args):
+    """Measure every scan of `args.scan` (files or folders) into the folder `--out`: a cylinder model per tree and
+    `summary.csv`, by `run_batch` (here, in worker processes, or on a dask cluster)."""
+    import json
+    from treebook.pointio import read_points
+    from treebook.qsm import write_qsm
+    from treebook.cli import qsm_scan   # the package's own, which a worker imports
+    files = _scan_files(args.scan)
+    folder, _ = out_folder(args.out)
+    if Path(args.out).suffix: raise TreebookError(f"qsm writes its tables into a folder: --out {args.out} names a file")
+    client = dask_client(args.scheduler) if args.scheduler else None
+    folder.mkdir(parents=True, exist_ok=True)
+    options = dict(up=args.up, foliage=args.foliage, trees=args.trees, seed=args.seed)
+
+    def write(f, result):
+        from treebook.pointio import write_points
+        for category, message in result["warnings"]: warnings.warn(f"{f.name}: {message}", category)
+        n = len(result["tables"])
+        with all_or_nothing():
+            wrote = [p for k, t in enumerate(result["tables"], 1)
+                     for p in write_qsm(t, folder, f"{f.stem}_{k}" if args.trees == "all" else f.stem)]
+            if args.labels:
+                like = f if f.suffix.lower() in (".las", ".laz") else None
+                wrote.append(write_points(folder / f"{f.stem}_labels.{args.labels}", read_points(f), result["labels"],
+                                          like=like))
+        s = result["tables"][0]["summary"]
+        print(f"measured {n} tree{'s' if n > 1 else ''} of {f.name} in {result['seconds']:.1f} s: volume "
+              f"{s['total_volume']:.3g} m3, DBH {s['dbh']:.3g} m, height {s['height']:.3g} m")
+        for p in wrote: print(f"wrote {p}")
+    try:
+        return run_batch(files, qsm_scan, options, write, done=lambda f: bool(_qsm_stems(folder, f.stem)),
+                         read=lambda f: read_points(f, up=args.up), verb="measured", workers=args.workers,
+                         scheduler=client, preload=["treebook.qsm"])
+    finally:
+        if client is not None: client.close()
+        rows = [{"scan": f.name, "tree": k, **json.loads((folder / f"{s}_summary.json").read_text())}
+                for f in files for k, s in enumerate(_qsm_stems(folder, f.stem), 1)]
+        if rows: write_summary(folder / "summary.csv", rows, columns=list(rows[0]))
+
 # %% ../nbs/11_cli.ipynb #45436cc7
 def cmd_train(args):
     "`treebook train ...`: the options belong to `treebook.train.main`, which parses them itself."
@@ -854,6 +923,29 @@ def _add_reconstruct(sub):
                        "install distributed): the points go to its workers, the files are written here")
     s.set_defaults(func=cmd_reconstruct)
 
+# %% ../nbs/11_cli.ipynb #b18ad039
+def _add_qsm(sub):
+    "The `treebook qsm` subcommand."
+    s = sub.add_parser("qsm", help="measure trees: cylinder model, volume, DBH, lengths (TreeQSM's tables)",
+                       description="Reconstruct each scan and measure its tree(s): a cylinder table, a branch table "
+                       "and a summary per tree (CSV and JSON, TreeQSM's columns, metres and cubic metres, the scan's "
+                       "coordinates), and DIR/summary.csv with a row per tree. Scans must be in metres.")
+    s.add_argument("scan", nargs="+", help="point clouds (.xyz, .txt, .pts, .csv, .ply, .pcd, .las, .laz, .e57, .npy) "
+                   "or folders of them")
+    s.add_argument("--out", required=True, help="output folder")
+    s.add_argument("--up", default="z", choices=["z", "y"], help="the file's vertical axis (default: z)")
+    s.add_argument("--foliage", action="store_true", help="remove leaf points first (chapter 09c)")
+    s.add_argument("--trees", default="joined", choices=["joined", "largest", "all"],
+                   help="a scan of several trees: measure them joined (default), the largest, or all (NAME_1 ...)")
+    s.add_argument("--labels", choices=["las", "laz", "ply"],
+                   help="also write NAME_labels.FORMAT: the scan's points with fields tree, branch and cylinder (rows "
+                   "of the tables; 0 for none), after a LAS/LAZ scan's header")
+    s.add_argument("--workers", type=flag_number(int, 0, 256), default=0,
+                   help="worker processes (default 0: as many as cores, at most 4; 1: this process)")
+    s.add_argument("--scheduler", help="run on this dask.distributed scheduler (host:port) instead")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
+    s.set_defaults(func=cmd_qsm)
+
 # %% ../nbs/11_cli.ipynb #cf823b5d
 def _add_train(sub):
     "The `treebook train` subcommand."
@@ -942,7 +1034,7 @@ def _add_conditioned(sub):
 
 # %% ../nbs/11_cli.ipynb #298af021
 _SUBCOMMANDS = (_add_demo, _add_info, _add_export, _add_render, _add_generate, _add_grammar, _add_enhance,
-                _add_propagate, _add_reconstruct, _add_train, _add_sample, _add_grow, _add_complete, _add_conditioned)
+                _add_propagate, _add_reconstruct, _add_qsm, _add_train, _add_sample, _add_grow, _add_complete, _add_conditioned)
 
 def build_parser() -> argparse.ArgumentParser:
     "The `treebook` argument parser with all subcommands."
