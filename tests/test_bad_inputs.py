@@ -116,6 +116,7 @@ for f, says in SCANS:
     case(f"enhance-{f}", ["enhance", "{i}/" + f, "--out", "{o}/e"], says)
     case(f"reconstruct-{f}", ["reconstruct", "{i}/" + f, "--method", "classic", "--out", "{o}/r.npz"], says)
     case(f"points2tree-{f}", ["points2tree", "{i}/" + f, "--out", "{o}/p"], says)
+    case(f"qsm-{f}", ["qsm", "{i}/" + f, "--out", "{o}/q", "--workers", "1"], says)
 
 # outputs that cannot be written: checked before any work
 for cmd, argv in {"export": ["export", "{i}/good.npz", "--out", UNWRITABLE + ".obj"],
@@ -206,6 +207,10 @@ for name, argv, says in [
         ("grammar-suffix", ["grammar", "{i}/collinear.xyz", "--out", "{o}/g.txt"], ".json"),
         ("enhance-grid", ["enhance", "{i}/collinear.xyz", "--grid", "4", "--out", "{o}/e"], "grid"),
         ("reconstruct-suffix", ["reconstruct", "{i}/collinear.xyz", "--out", "{o}/r.txt"], ".npz"),
+        ("qsm-out-file", ["qsm", "{i}/collinear.xyz", "--out", "{o}/q.csv"], "names a file"),
+        ("qsm-out", ["qsm", "{i}/collinear.xyz", "--out", UNWRITABLE], ""),
+        ("qsm-labels", ["qsm", "{i}/collinear.xyz", "--out", "{o}/q", "--labels", "xyz"], "--labels"),
+        ("qsm-workers", ["qsm", "{i}/collinear.xyz", "--out", "{o}/q", "--workers", "-1"], "--workers"),
         ("reconstruct-mesh-suffix", ["reconstruct", "{i}/collinear.xyz", "--out", "{o}/r.npz", "--mesh", "{o}/r.stl"], "--mesh"),
         ("reconstruct-no-folder", ["reconstruct", "{i}/collinear.xyz", "--out", "{o}/no/r.npz"], "does not exist"),
         ("reconstruct-method", ["reconstruct", "{i}/collinear.xyz", "--out", "{o}/r.npz", "--method", "magic"], "magic"),

@@ -572,6 +572,7 @@ def cmd_qsm(args):
     folder, _ = out_folder(args.out)
     if Path(args.out).suffix: raise TreebookError(f"qsm writes its tables into a folder: --out {args.out} names a file")
     client = dask_client(args.scheduler) if args.scheduler else None
+    made_folder = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     options = dict(up=args.up, foliage=args.foliage, trees=args.trees, seed=args.seed)
 
@@ -599,6 +600,7 @@ def cmd_qsm(args):
         rows = [{"scan": f.name, "tree": k, **json.loads((folder / f"{s}_summary.json").read_text())}
                 for f in files for k, s in enumerate(_qsm_stems(folder, f.stem), 1)]
         if rows: write_summary(folder / "summary.csv", rows, columns=list(rows[0]))
+        elif made_folder and not any(folder.iterdir()): folder.rmdir()   # nothing measured: nothing left behind
 
 # %% ../nbs/11_cli.ipynb #45436cc7
 def cmd_train(args):
