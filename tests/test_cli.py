@@ -117,7 +117,8 @@ def test_wheel_runs_the_demo_on_its_own(tmp_path):
     assert len(obj.faces) > 100
     from PIL import Image
     assert np.asarray(Image.open(work / "out" / "tree.png")).std() > 5
-    for name in ("species_gallery.png", "grammar/grammar.json", "reconstruct/reconstructed_tree13.obj"):
+    for name in ("species_gallery.png", "grammar/grammar.json", "reconstruct/reconstructed_tree13.obj",
+                 "measure/measured_cylinders.csv"):
         assert (work / "out" / name).exists(), name
     assert any((work / "out" / "growth").rglob("growth_filmstrip.png"))
 
