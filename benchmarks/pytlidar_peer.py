@@ -170,31 +170,6 @@ def _child(work: Path):
     (work / "child.json").write_text(json.dumps(r))
 
 
-def tree_truth(tree) -> dict:
-    """True volume (m^3, frustums), DBH (m, stem diameter 1.3 m above the root's lowest point), length (m) and height of
-    a treebook Tree in metres. The stem is the root followed by, at each fork, the child with the largest start radius."""
-    s, e, par = np.asarray(tree.start, np.float64), np.asarray(tree.end, np.float64), np.asarray(tree.parent)
-    L = np.linalg.norm(e[:, :3] - s[:, :3], axis=1)
-    r0, r1 = s[:, 3], e[:, 3]
-    vol = float(np.sum(np.pi * L / 3 * (r0 ** 2 + r0 * r1 + r1 ** 2)))
-    root = int(np.flatnonzero(par < 0)[0])
-    zb = min(s[root, 2], e[root, 2]) + 1.3
-    kids = [[] for _ in range(len(par))]
-    for i, p in enumerate(par):
-        if p >= 0: kids[p].append(i)
-    dbh, i = float("nan"), root
-    while True:
-        lo, hi = sorted((s[i, 2], e[i, 2]))
-        if lo <= zb <= hi and hi > lo:
-            t = (zb - s[i, 2]) / (e[i, 2] - s[i, 2])
-            dbh = float(2 * (r0[i] + t * (r1[i] - r0[i])))
-            break
-        if not kids[i]: break
-        i = max(kids[i], key=lambda k: s[k, 3])
-    z = np.concatenate([s[:, 2], e[:, 2]])
-    return dict(volume=vol, dbh=dbh, length=float(L.sum()), height=float(np.ptp(z)), branches=int(len(par)))
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scans", nargs="*")

@@ -2,22 +2,17 @@
 import numpy as np
 import pytest
 
-from treebook.qsm import (CYLINDER_COLUMNS, qsm, read_cylinders, segment_volumes, trunk_radius_at, write_qsm)
+from treebook.qsm import (CYLINDER_COLUMNS, example_in_metres, qsm, read_cylinders, segment_volumes,
+                          trunk_radius_at, write_qsm)
 from treebook.scan import scan
-from treebook.tree import Tree, TreebookError, example_tree
+from treebook.tree import TreebookError
 
 
-def tree_in_metres(height=8.0, base=0.1, seed=0):
-    t = example_tree(levels=4, seed=seed)
-    t = t.scale(height / t.height)
-    s, e = t.start.copy(), t.end.copy()
-    s[:, 3] *= base / t.start[0, 3]; e[:, 3] *= base / t.start[0, 3]
-    return Tree(s, e, t.parent)
 
 
 @pytest.fixture(scope="module")
 def measured():
-    truth = tree_in_metres()
+    truth = example_in_metres()
     pts = scan(truth, n_points=30000, views=3, noise=0.0003, outliers=0.0, sides=24, seed=1).points.astype(float)
     return truth, pts, qsm(pts)
 

@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 
 from treebook.pointio import read_fields
-from treebook.qsm import CYLINDER_COLUMNS, read_cylinders
+from treebook.qsm import CYLINDER_COLUMNS, example_in_metres, read_cylinders
 from treebook.scan import scan
-from test_qsm import tree_in_metres
 
 
 def run(cmd, *args):
@@ -21,7 +20,7 @@ def plot(tmp_path_factory):
     "Two scans of trees in metres (one as LAS in map coordinates), a broken file and a note."
     d = tmp_path_factory.mktemp("plot")
     for i in range(2):
-        p = scan(tree_in_metres(seed=i), n_points=15000, views=3, noise=0.0003, outliers=0.0, sides=24,
+        p = scan(example_in_metres(seed=i), n_points=15000, views=3, noise=0.0003, outliers=0.0, sides=24,
                  seed=i).points.astype(float)
         if i == 0: np.savetxt(d / "t0.xyz", p, fmt="%.4f")
         else:
@@ -82,7 +81,7 @@ def test_workers_and_dask_measure_the_same(one_by_one, plot, treebook_cmd, tmp_p
 
 
 def test_short_tree_and_empty_folder(treebook_cmd, tmp_path):
-    p = scan(tree_in_metres(height=1.0, base=0.02), n_points=5000, noise=0.0003, outliers=0.0, seed=0).points
+    p = scan(example_in_metres(height=1.0, base=0.02), n_points=5000, noise=0.0003, outliers=0.0, seed=0).points
     np.savetxt(tmp_path / "sapling.xyz", p, fmt="%.5f")
     r = run(treebook_cmd, "qsm", tmp_path / "sapling.xyz", "--out", tmp_path / "o")
     assert r.returncode == 2 and "needs a taller tree" in r.stderr and "Traceback" not in r.stderr

@@ -115,13 +115,10 @@ def demo_foliage(out_dir, seed: int = 0) -> list:
 def demo_measure(out_dir, seed: int = 0) -> list:
     """A procedural tree of known volume, DBH and length, scanned and measured by `treebook.qsm.qsm`: its four tables
     into `out_dir`, and the measurements beside the truth printed; returns the paths."""
-    from treebook.qsm import qsm, segment_volumes, trunk_radius_at, write_qsm
+    from treebook.qsm import example_in_metres, qsm, segment_volumes, trunk_radius_at, write_qsm
     from treebook.scan import scan
-    from treebook.tree import Tree, example_tree
     out = Path(out_dir); out.mkdir(parents=True, exist_ok=True)
-    t = example_tree(levels=4, seed=seed).scale(4.0)
-    s, e = t.start.copy(), t.end.copy(); s[:, 3] *= 0.12 / t.start[0, 3]; e[:, 3] *= 0.12 / t.start[0, 3]
-    truth = Tree(s, e, t.parent)
+    truth = example_in_metres(height=10.0, base=0.12, seed=seed)
     pts = scan(truth, n_points=40000, views=3, noise=0.0003, outliers=0.0, sides=24, seed=seed).points
     m = qsm(pts.astype(np.float64), name="measured", seed=seed)
     got, true = m.summary, dict(total_volume=float(segment_volumes(truth).sum()),
