@@ -20,9 +20,10 @@ from .reconstruct import reconstruct, _axis_distances
 
 # %% auto #0
 __all__ = ['FIT_COLUMNS', 'CYLINDER_COLUMNS', 'BRANCH_COLUMNS', 'SUMMARY_ORDERS', 'example_in_metres', 'growth_length',
-           'branch_structure', 'fit_circle', 'segment_fits', 'trusted_fits', 'taper_law', 'honest_radii', 'with_radii',
-           'segment_volumes', 'trunk_radius_at', 'stem_diameter', 'QSM', 'cylinders', 'branches', 'summary',
-           'law_radii', 'measure_tree', 'qsm', 'qsm_tables', 'qsm_labels', 'write_qsm', 'read_cylinders']
+           'branch_structure', 'fit_circle', 'segment_fits', 'trusted_fits', 'taper_law', 'honest_radii',
+           'branch_levels', 'with_radii', 'segment_volumes', 'trunk_radius_at', 'stem_diameter', 'QSM', 'cylinders',
+           'branches', 'summary', 'law_radii', 'measure_tree', 'qsm', 'qsm_tables', 'qsm_labels', 'write_qsm',
+           'read_cylinders']
 
 # %% ../nbs/09d_qsm.ipynb #6ac35601
 def example_in_metres(height: float = 8.0, base: float = 0.1, levels: int = 4, seed: int = 0) -> Tree:
@@ -174,7 +175,7 @@ def trusted_fits(tree: Tree, fits, spacing: float, min_points: int = 12, min_cov
 def taper_law(tree: Tree, radii, trusted, anchor: tuple | None = None,
               exponents=(0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6), default: float = 0.4, min_range: float = 20.0,
               min_branches: int = 3) -> tuple:
-    """(k, b) of the tree's own taper law r = k (growth length)^b, from its `trusted` `radii`. With an `anchor`
+    """(k, b, measured) of the tree's own taper law r = k (growth length)^b, from its `trusted` `radii`. With an `anchor`
     (segment, radius), the law passes through it: the stem's diameter at 1.3 m, measured on its own points, is the
     surest radius of a tree, and b (between the least and the largest of `exponents`, in steps of 0.01) is the one
     under which the side branches' trusted radii sit on the law in the median (if that is the least of them, the
@@ -182,36 +183,39 @@ def taper_law(tree: Tree, radii, trusted, anchor: tuple | None = None,
     one of `exponents` under which all trusted radii agree best (least median deviation in log). When they lie on
     fewer than `min_branches` side branches or span less than `min_range` in growth length, b cannot be told (a stem
     tapers by other rules than its branches) and is `default`: the pipe model's 1/2.5 (a cross-section carries the
-    wood above it)."""
+    wood above it). `measured` says whether b was measured (False where it is `default`)."""
     r, ok = np.asarray(radii, np.float64), np.asarray(trusted, bool)
     if not ok.any() and anchor is None: raise TreebookError("taper_law needs a trusted radius or an anchor")
     lgl = np.log(growth_length(tree)); st = branch_structure(tree)
     side = np.unique(st["branch"][ok & (st["order"] > 0)])
     wide = ok.any() and np.ptp(lgl[ok]) >= math.log(min_range)
-    bs = exponents if len(side) >= min_branches and wide else (default,)
+    bs = exponents if len(side) >= min_branches and wide else ()
     x, g = np.log(r[ok]), lgl[ok]
     def k_of(b): return (math.log(anchor[1]) - b * lgl[anchor[0]]) if anchor is not None else np.median(x - b * g)
     if anchor is not None and len(bs) > 1:   # side branches (most of the wood above the stem) sit on the law
         on = (st["order"] > 0)[ok]
         bs = np.arange(min(exponents), max(exponents) + 1e-9, 0.01)
         dev = [abs(np.median(x[on] - b * g[on] - k_of(b))) for b in bs]
-        if int(np.argmin(dev)) == 0: bs, dev = (default,), [0.0]   # flatter than any tree: circles blown up by noise
+        if int(np.argmin(dev)) == 0: bs, dev = (), []   # flatter than any tree: circles blown up by noise
     else: dev = [np.median(np.abs(x - b * g - k_of(b))) if ok.any() else 0.0 for b in bs]
+    if not len(bs): return float(np.exp(k_of(default))), float(default), False
     b = float(bs[int(np.argmin(dev))])
-    return float(np.exp(k_of(b))), b
+    return float(np.exp(k_of(b))), b, True
 
 # %% ../nbs/09d_qsm.ipynb #bb7975eb
-def honest_radii(tree: Tree, radii, trusted, law: tuple, outlier: float = 0.5, taper: float = 1.05,
+def honest_radii(tree: Tree, radii, trusted, law: tuple, level=None, outlier: float = 0.5, taper: float = 1.05,
                  area: float = 1.2) -> tuple:
     """(radius (n,) of every segment, the trusted radii kept): a trusted radius stays unless it is more than
     e^`outlier` (1.6 times) off the taper `law` (k, b), which then marks a junction's bark or a blob of leaves;
-    every other segment takes the law. No segment is thicker than `taper` times its parent, and the cross-sections
-    leaving a fork add up to at most `area` times the one entering it (da Vinci's rule: measured trees keep their
-    area through a fork, give or take a fifth); the law's radii are scaled down to fit."""
+    every other segment takes the law, times e^`level` (n,) where given (`branch_levels`). No segment without a
+    circle is thicker than `taper` times its parent, and the cross-sections leaving a fork add up to at most `area`
+    times the one entering it (da Vinci's rule: measured trees keep their area through a fork, give or take a
+    fifth); the law's radii are scaled down to fit."""
     k, b = law
     r, ok = np.asarray(radii, np.float64), np.asarray(trusted, bool)
     model = k * growth_length(tree) ** b
     with np.errstate(invalid="ignore"): ok = ok & (np.abs(np.log(r / model)) <= outlier)
+    if level is not None: model = model * np.exp(level)
     out = np.where(ok, r, model)
     kids = [[] for _ in range(tree.n)]
     for i, p in enumerate(tree.parent.tolist()):
@@ -220,12 +224,32 @@ def honest_radii(tree: Tree, radii, trusted, law: tuple, outlier: float = 0.5, t
         c = kids[i]
         if not c: continue
         c = np.array(c); free = c[~ok[c]]
-        out[c] = np.minimum(out[c], taper * out[i])
+        out[free] = np.minimum(out[free], taper * out[i])   # a circle further up the branch is not overruled
         have, room = (out[c] ** 2).sum(), area * out[i] ** 2
         if have > room and len(free):
             fixed = (out[c[ok[c]]] ** 2).sum()
             out[free] *= math.sqrt(max(room - fixed, 0.25 * room) / max((out[free] ** 2).sum(), 1e-300))
     return out, ok
+
+# %% ../nbs/09d_qsm.ipynb #97aedea9
+def branch_levels(tree: Tree, radii, trusted, law: tuple) -> np.ndarray:
+    """How far (n,) each segment sits off the taper `law` (k, b), in log: on a branch with `trusted` circles, the
+    level of the nearest of them, interpolated between two (along the branch) and held beyond the last; on a branch
+    without, the level of the segment it leaves from. A scan's circles say more about their own branch than a
+    law fitted to the whole tree."""
+    k, b = law
+    st = branch_structure(tree)
+    ok = np.asarray(trusted, bool)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dev = np.log(np.where(ok, radii, 1.0) / (k * growth_length(tree) ** b))
+    level = np.zeros(tree.n)
+    by = np.lexsort((st["position"], st["branch"]))   # segments branch by branch, from each branch's base
+    for seg in np.split(by, np.flatnonzero(np.diff(st["branch"][by])) + 1):   # branches by order: parents first
+        have = np.flatnonzero(ok[seg])
+        if len(have): level[seg] = np.interp(np.arange(len(seg)), have, dev[seg[have]])
+        elif tree.parent[seg[0]] >= 0: level[seg] = level[tree.parent[seg[0]]]
+    return level
+
 
 # %% ../nbs/09d_qsm.ipynb #1bdbf101
 def with_radii(tree: Tree, radii) -> Tree:
@@ -278,7 +302,8 @@ def trunk_radius_at(tree: Tree, height: float) -> float:
 def stem_diameter(points, tree: Tree, height: float = 1.3, band: float = 0.05) -> tuple:
     """(diameter, centre x y) of the stem `height` above the base of `tree`, from a circle fitted to the `points`
     within `band` of that height and near the trunk (within twice its radius and 5 cm); (NaN, None) when they are too
-    few or cover too little of a circle. `points` and `tree` in the same frame, in metres."""
+    few or cover too little of a circle. The circle's rms s is taken as noise: a radius r fitted through it is
+    sqrt(r^2 - s^2). `points` and `tree` in the same frame, in metres."""
     p = np.asarray(points, np.float64)
     trunk = _trunk(tree)
     if not len(trunk): return float("nan"), None
@@ -305,7 +330,7 @@ def stem_diameter(points, tree: Tree, height: float = 1.3, band: float = 0.05) -
     cover = len(np.unique(((ang + np.pi) / (2 * np.pi) * 12).astype(int) % 12)) / 12
     if cover < 0.4 or r > reach or rms > 0.3 * r: return float("nan"), None
     at = centre + c[0] * A + c[1] * B
-    return 2 * r, at[:2]
+    return 2 * math.sqrt(r * r - rms * rms), at[:2]   # less the noise, which widens a circle (as in `law_radii`)
 
 # %% ../nbs/09d_qsm.ipynb #f646abc2
 CYLINDER_COLUMNS = {   # TreeQSM's cylinder table (its names in snake case, its order), metres; ids 1-based, 0 = none
@@ -474,8 +499,9 @@ def _anchor(tree: Tree, fits, radii, trusted, dbh: float):
 def law_radii(tree: Tree, fits, radii, trusted, anchor, name: str = "tree") -> tuple:
     """(radius of every segment, the trusted fits kept, the exponent b): the taper law fitted to the trusted circles
     through the `anchor`, the fits that disagree with it dropped, and again until they agree (`taper_law`,
-    `honest_radii`). The law is fitted to the circles less their noise (an rms of s widens a circle of radius r to
-    about sqrt(r^2 + s^2)). With no trusted circle and no anchor: the reconstruction's radii, and a warning."""
+    `honest_radii`); where the circles were good enough to measure the law's exponent, a branch's segments
+    follow the law at the level of its nearest circles (`branch_levels`). The law is fitted to the circles less their noise (an rms of s widens a circle of
+    radius r to about sqrt(r^2 + s^2)). With no trusted circle and no anchor: the reconstruction's radii, and a warning."""
     if not trusted.any() and anchor is None:
         import warnings
         warnings.warn(f"{name}: no circle could be trusted (too few points on each branch?): radii as measured by "
@@ -483,10 +509,12 @@ def law_radii(tree: Tree, fits, radii, trusted, anchor, name: str = "tree") -> t
         return tree.end[:, 3].astype(np.float64), trusted, float("nan")
     bare = np.sqrt(np.maximum(radii ** 2 - fits[:, 1] ** 2, (0.5 * radii) ** 2))
     for _ in range(4):
-        k, b = taper_law(tree, bare, trusted, anchor=anchor)
+        k, b, measured = taper_law(tree, bare, trusted, anchor=anchor)
         r, kept = honest_radii(tree, radii, trusted, (k, b))
         if (kept == trusted).all(): break
         trusted = kept
+    if measured:   # circles that tell the law are good enough to tell their branches' level too
+        r, _ = honest_radii(tree, radii, trusted, (k, b), level=branch_levels(tree, radii, trusted, (k, b)))
     return r, trusted, b
 
 # %% ../nbs/09d_qsm.ipynb #8d1edaf4
