@@ -22,8 +22,8 @@ from .reconstruct import reconstruct, _axis_distances
 __all__ = ['FIT_COLUMNS', 'CYLINDER_COLUMNS', 'BRANCH_COLUMNS', 'SUMMARY_ORDERS', 'example_in_metres', 'growth_length',
            'branch_structure', 'fit_circle', 'segment_fits', 'trusted_fits', 'taper_law', 'honest_radii',
            'branch_levels', 'with_radii', 'segment_volumes', 'trunk_radius_at', 'stem_diameter', 'QSM', 'cylinders',
-           'branches', 'summary', 'law_radii', 'measure_tree', 'qsm', 'qsm_tables', 'qsm_labels', 'write_qsm',
-           'read_cylinders']
+           'branches', 'summary', 'reach_tips', 'law_radii', 'measure_tree', 'qsm', 'qsm_tables', 'qsm_labels',
+           'write_qsm', 'read_cylinders']
 
 # %% ../nbs/09d_qsm.ipynb #6ac35601
 def example_in_metres(height: float = 8.0, base: float = 0.1, levels: int = 4, seed: int = 0) -> Tree:
@@ -175,15 +175,15 @@ def trusted_fits(tree: Tree, fits, spacing: float, min_points: int = 12, min_cov
 def taper_law(tree: Tree, radii, trusted, anchor: tuple | None = None,
               exponents=(0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6), default: float = 0.4, min_range: float = 20.0,
               min_branches: int = 3) -> tuple:
-    """(k, b, measured) of the tree's own taper law r = k (growth length)^b, from its `trusted` `radii`. With an `anchor`
-    (segment, radius), the law passes through it: the stem's diameter at 1.3 m, measured on its own points, is the
-    surest radius of a tree, and b (between the least and the largest of `exponents`, in steps of 0.01) is the one
-    under which the side branches' trusted radii sit on the law in the median (if that is the least of them, the
-    circles are wider than branches can be, widened by noise or leaves, and b is `default`). Without one, b is the
-    one of `exponents` under which all trusted radii agree best (least median deviation in log). When they lie on
-    fewer than `min_branches` side branches or span less than `min_range` in growth length, b cannot be told (a stem
-    tapers by other rules than its branches) and is `default`: the pipe model's 1/2.5 (a cross-section carries the
-    wood above it). `measured` says whether b was measured (False where it is `default`)."""
+    """(k, b, measured) of the tree's own taper law r = k (growth length)^b, from its `trusted` `radii`. With an
+    `anchor` (segment, radius), the law passes through it: the stem's diameter at 1.3 m, measured on its own points, is
+    the surest radius of a tree, and b (between the least and the largest of `exponents`, in steps of 0.01) is the one
+    under which the side branches' trusted radii sit on the law in the median (if that is the least of them, the circles
+    are wider than branches can be, widened by noise or leaves, and b is `default`). Without one, b is the one of
+    `exponents` under which all trusted radii agree best (least median deviation in log). When they lie on fewer than
+    `min_branches` side branches or span less than `min_range` in growth length, b cannot be told (a stem tapers by
+    other rules than its branches) and is `default`: the pipe model's 1/2.5 (a cross-section carries the wood above it).
+    `measured` says whether b was measured (False where it is `default`)."""
     r, ok = np.asarray(radii, np.float64), np.asarray(trusted, bool)
     if not ok.any() and anchor is None: raise TreebookError("taper_law needs a trusted radius or an anchor")
     lgl = np.log(growth_length(tree)); st = branch_structure(tree)
@@ -483,6 +483,25 @@ def _quantiles(group, x, m: int, q: float, min_count: int = 3) -> np.ndarray:
     out[ok] = v[(first + np.floor(q * (cnt - 1)).astype(np.int64))[ok]]
     return out
 
+# %% ../nbs/09d_qsm.ipynb #5a847dd6
+def reach_tips(tree: Tree, points, segment, q: float = 0.95) -> Tree:
+    """`tree` with each tip segment carried on along its axis to where its `points` (those with `segment` its index,
+    at least 3) end: the `q` quantile of how far they lie beyond its end, at most the segment's own length. A level
+    set's node is the middle of its ring of points, so a skeleton stops half a ring short of every twig's end."""
+    p, seg = np.asarray(points, np.float64), np.asarray(segment)
+    tip = np.bincount(tree.parent[tree.parent >= 0], minlength=tree.n) == 0
+    s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
+    L = np.linalg.norm(e - s, axis=1)
+    u = (e - s) / np.maximum(L, 1e-300)[:, None]
+    on = (seg >= 0) & tip[np.maximum(seg, 0)]
+    k = seg[on]
+    beyond = _quantiles(k, ((p[on] - e[k]) * u[k]).sum(1), tree.n, q)
+    go = tip & np.isfinite(beyond) & (beyond > 0) & (L > 0)
+    end = tree.end.copy()
+    end[go, :3] = e[go] + u[go] * np.minimum(beyond[go], L[go])[:, None]
+    return Tree(tree.start, end, tree.parent, check=False, origin=tree.origin, **tree.attrs)
+
+
 # %% ../nbs/09d_qsm.ipynb #3ac0939f
 def _anchor(tree: Tree, fits, radii, trusted, dbh: float):
     """(segment, radius) that the taper law passes through: the stem's circle at 1.3 m (diameter `dbh`), else the
@@ -499,9 +518,10 @@ def _anchor(tree: Tree, fits, radii, trusted, dbh: float):
 def law_radii(tree: Tree, fits, radii, trusted, anchor, name: str = "tree") -> tuple:
     """(radius of every segment, the trusted fits kept, the exponent b): the taper law fitted to the trusted circles
     through the `anchor`, the fits that disagree with it dropped, and again until they agree (`taper_law`,
-    `honest_radii`); where the circles were good enough to measure the law's exponent, a branch's segments
-    follow the law at the level of its nearest circles (`branch_levels`). The law is fitted to the circles less their noise (an rms of s widens a circle of
-    radius r to about sqrt(r^2 + s^2)). With no trusted circle and no anchor: the reconstruction's radii, and a warning."""
+    `honest_radii`); where the circles were good enough to measure the law's exponent, a branch's segments follow the
+    law at the level of its nearest circles (`branch_levels`). The law is fitted to the circles less their noise (an rms
+    of s widens a circle of radius r to about sqrt(r^2 + s^2)). With no trusted circle and no anchor: the
+    reconstruction's radii, and a warning."""
     if not trusted.any() and anchor is None:
         import warnings
         warnings.warn(f"{name}: no circle could be trusted (too few points on each branch?): radii as measured by "
@@ -520,15 +540,16 @@ def law_radii(tree: Tree, fits, radii, trusted, anchor, name: str = "tree") -> t
 # %% ../nbs/09d_qsm.ipynb #8d1edaf4
 def measure_tree(tree: Tree, raw, labelled, name: str = "tree", seed: int = 0) -> QSM:
     """The `QSM` of one reconstructed `tree` (about its origin) from the scan's points `raw` (in the scan's
-    coordinates): the points `labelled` (a mask) are given to their nearest segment, circles fitted, radii made
-    honest, the stem measured at 1.3 m."""
+    coordinates): the tips reach their points (`reach_tips`), the points `labelled` (a mask) are given to their
+    nearest segment, circles fitted, radii made honest, the stem measured at 1.3 m."""
     o = tree.origin
     p = np.asarray(raw, np.float64) - o
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
     idx = np.flatnonzero(labelled)
     if len(idx) < 10: raise TreebookError(f"{name}: only {len(idx)} points lie on the tree: too few to measure")
     sp = _spacing(p[idx], seed=seed)
-    seg, dist = _axis_distances(s, e, p[idx], 0.5 * sp)
+    tree = reach_tips(tree, p[idx], _axis_distances(s, e, p[idx], 0.5 * sp)[0])
+    seg, dist = _axis_distances(s, tree.end[:, :3].astype(np.float64), p[idx], 0.5 * sp)
     segment = np.full(len(p), -1, np.int64); segment[idx] = seg
     fits = segment_fits(tree, p, segment, seed=seed)
     radii, trusted = trusted_fits(tree, fits, sp)
@@ -546,16 +567,18 @@ def measure_tree(tree: Tree, raw, labelled, name: str = "tree", seed: int = 0) -
                None if centre is None else centre + o[:2], name=name)
 
 # %% ../nbs/09d_qsm.ipynb #c87099ad
-def qsm(src, up: str = "z", foliage=False, trees: str = "joined", seed: int = 0, max_points: int = 60_000,
+def qsm(src, up: str = "z", foliage=False, trees: str = "joined", seed: int = 0, max_points: int | None = None,
         name: str | None = None):
     """Cylinder model(s) of the scan `src` (a path or an (n, 3) array, in metres): the tree reconstructed from level
-    sets (`reconstruct(method='classic')`, whose axes run through the middle of thick stems), measured by
-    `measure_tree`. A `QSM`, or with `trees='all'` a list of them (largest first; trees too short to measure at
-    1.3 m are left out with a warning)."""
+    sets (`reconstruct(method='classic')`, whose axes run through the middle of thick stems) on up to `max_points` of
+    its points (200,000; 60,000 with `foliage`), keeping pieces of wood cut off by holes down to 0.1 % of them, measured
+    by `measure_tree`. A `QSM`, or with `trees='all'` a list of them (largest first; trees too short to measure at 1.3 m
+    are left out with a warning)."""
     raw = read_points(src, up=up)
+    if max_points is None: max_points = 60_000 if foliage is not False else 200_000   # see the text
     name = name or (Path(src).stem if isinstance(src, (str, Path)) else "tree")
     made = reconstruct(raw, method="classic", foliage=foliage, seed=seed, trees=trees, max_points=max_points,
-                       return_info=True)
+                       min_share=0.001, return_info=True)
     made = made if trees == "all" else [made]
     out = []
     for k, (tree, info) in enumerate(made):

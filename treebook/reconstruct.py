@@ -26,8 +26,10 @@ __all__ = ['VOXEL', 'FOLIAGE', 'METHODS', 'TREES', 'RADII', 'SHIPPED_SCAN', 'nei
            'tube_distance', 'tree_coverage', 'wood_points', 'wood_mask', 'reconstruct']
 
 # %% ../nbs/09b_reconstruct.ipynb #77b538d9
-def neighbour_graph(points, k: int = 10) -> tuple:
-    "(symmetric sparse graph of kept points, indices of kept points into `points`, root index into the kept points)."
+def neighbour_graph(points, k: int = 10, min_share: float = 0.01) -> tuple:
+    """(symmetric sparse graph of kept points, indices of kept points into `points`, root index into the kept points).
+    Pieces cut off from the rest are kept if they hold `min_share` of the points and 10 or more (smaller ones are
+    specks), and bridged to the rest, nearest first."""
     n = len(points)
     k = min(k, n - 1)
     kd = cKDTree(points)
@@ -40,7 +42,7 @@ def neighbour_graph(points, k: int = 10) -> tuple:
     g = g.maximum(g.T)
     nc, lab = connected_components(g, directed=False)
     size = np.bincount(lab, minlength=nc)
-    big = np.flatnonzero(size >= max(10, 0.01 * n))
+    big = np.flatnonzero(size >= max(10, min_share * n))
     if not len(big): raise TreebookError("the points are scattered with no connected structure: is this a tree scan?")
     keep = np.isin(lab, big)
     idx = np.flatnonzero(keep)
@@ -96,11 +98,11 @@ def _circle_fit(p, c, t) -> tuple:
 
 # %% ../nbs/09b_reconstruct.ipynb #a4f78c93
 def level_set_skeleton(points, bin_size: float | None = None, labels=None, k: int = 10, min_points: int = 3,
-                       segments: bool = False) -> tuple:
+                       segments: bool = False, min_share: float = 0.01) -> tuple:
     ("(Tree of the skeleton, node id of each point (-1 dropped), or with `segments` its segment index) for points (n, "
      "3) with z up, optionally split by `labels` (n,).")
     points = np.asarray(points, np.float64)
-    g, idx, root = neighbour_graph(points, k)
+    g, idx, root = neighbour_graph(points, k, min_share)
     q = points[idx]
     n = len(q)
     diag = _diag(q)
@@ -657,7 +659,8 @@ def cover_spurs(points, geo, pred, start, end, parent, reach: float, step: float
 # %% ../nbs/09b_reconstruct.ipynb #cef271e9
 def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 1.0, step: float = 2.0,
                   apart: float = 0.5, apart_diag: float = 0.002, twig_diag: float = 0.002, power: float = 2.0,
-                  smooth: bool = True, cover: float = 1.5, cover_points: int | None = None, centre: bool = True) -> Tree:
+                  smooth: bool = True, cover: float = 1.5, cover_points: int | None = None, centre: bool = True,
+                  min_share: float = 0.01) -> Tree:
     """A connected skeleton `Tree` (radii not yet measured) of points (n, 3), z up, made of paths through the points.
     - nodes: `entry_nodes` on bins `bin_spacings` point spacings wide of the distance along `hop_tree` (edges cost
       their length to the `power`) of the `k`-neighbour graph;
@@ -677,7 +680,7 @@ def path_skeleton(points, k: int = 14, bin_spacings: float = 0.5, twig: float = 
             raise TreebookError(f"{name} must be a number of point spacings in (0, 1000), got {v!r}")
     if not (isinstance(cover, (int, float, np.integer, np.floating)) and 0 <= cover < 1000):
         raise TreebookError(f"cover must be a number of point spacings in [0, 1000), got {cover!r}")
-    g, idx, root = neighbour_graph(q, k)
+    g, idx, root = neighbour_graph(q, k, min_share)
     q = q[idx]
     spacing = float(np.median(cKDTree(q).query(q, 2, workers=-1)[0][:, 1]))
     geo, pred = hop_tree(g, root, power)
@@ -909,7 +912,7 @@ TREES = ("joined", "largest", "all")
 RADII = ("measured", "pipe")
 
 # %% ../nbs/09b_reconstruct.ipynb #e5200e44
-def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_info, t0):
+def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_info, t0, min_share=0.01):
     "The tree of the prepared points `p` (and with `return_info` its dict, see `reconstruct`)."
     labels, seg = None, None
     if method == "partnet":
@@ -918,8 +921,9 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_in
         seg = segment(load_partnet(weights), p, seed=seed)
         labels = seg["branch"]
     if method == "paths":  # its vertices follow the points, so it has no sharp joins to round
-        tree, segment_of = segment_radii(path_skeleton(p), p, return_segment=True)
-    else: tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True)
+        tree, segment_of = segment_radii(path_skeleton(p, min_share=min_share), p, return_segment=True)
+    else: tree, segment_of = level_set_skeleton(p, bin_size=bin_size, labels=labels, segments=True,
+                                                min_share=min_share)
     last, joins = np.arange(tree.n), 0
     if hermite and method != "paths":
         joins = int((_turns(tree) > 120).sum())
@@ -937,16 +941,19 @@ def _one_tree(raw, p, method, seed, bin_size, weights, hermite, radii, return_in
 def reconstruct(points, method: str = "paths", up: str = "z", foliage=False, seed: int = 0,
                 bin_size: float | None = None, max_points: int = 60_000, ground: bool = True, weights=None,
                 hermite: bool = True, return_info: bool = False, voxel: float = VOXEL,
-                foliage_weights=None, trees: str = "joined", radii: str = "measured"):
+                foliage_weights=None, trees: str = "joined", radii: str = "measured", min_share: float = 0.01):
     """A connected `Tree` rooted at the base of the scan `points` (path or (n, 3) array), in the scan's frame and units
     (about an `origin` when the scan is in map coordinates, see `origin_for`). If `find_trees` sees several trees,
     `trees` says what to make: 'joined' (one tree of all the points, and a warning), 'largest', or 'all' (a list,
     largest first, of trees or with `return_info` of (tree, info) pairs).
     `radii`: 'measured' from the points around each node, or 'pipe' (`pipe_radii`: the pipe model, scaled by the
-    trunk)."""
+    trunk). A piece of the scan cut off from the rest (a branch behind a hole) is kept if it holds `min_share` of
+    the points (`neighbour_graph`)."""
     if method not in METHODS: raise TreebookError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if trees not in TREES: raise TreebookError(f"trees must be one of {', '.join(TREES)}, got {trees!r}")
     if radii not in RADII: raise TreebookError(f"radii must be one of {', '.join(RADII)}, got {radii!r}")
+    if not (isinstance(min_share, (int, float, np.integer, np.floating)) and 0 <= min_share <= 1):
+        raise TreebookError(f"min_share must be a share of the points in [0, 1], got {min_share!r}")
     t0 = time.perf_counter()
     raw = read_points(points, up=up)
     # map coordinates: work about an origin, so that the tree's float32 positions keep their detail
@@ -967,7 +974,8 @@ def reconstruct(points, method: str = "paths", up: str = "z", foliage=False, see
         warnings.warn(f"the scan seems to hold {k} trees, with stems at x, y = {bases}; they were joined into one. "
                       "trees='largest' keeps the largest, trees='all' makes one tree each (command line: --trees)")
     parts = [p] if k == 1 or trees == "joined" else [p[which == i] for i in range(k if trees == "all" else 1)]
-    made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, radii, return_info, t0) for q in parts]
+    made = [_one_tree(raw, q, method, seed, bin_size, weights, hermite, radii, return_info, t0, min_share)
+            for q in parts]
     # back in the scan's frame: the tree about the origin, the points returned in the scan's coordinates
     if o is not None:
         made = [(_placed(m[0], o), {**m[1], "points": m[1]["points"] + o}) if return_info else _placed(m, o)
