@@ -22,8 +22,8 @@ from .reconstruct import reconstruct, _axis_distances
 __all__ = ['FIT_COLUMNS', 'CYLINDER_COLUMNS', 'BRANCH_COLUMNS', 'SUMMARY_ORDERS', 'example_in_metres', 'growth_length',
            'branch_structure', 'fit_circle', 'segment_fits', 'trusted_fits', 'taper_law', 'honest_radii',
            'branch_levels', 'with_radii', 'segment_volumes', 'trunk_radius_at', 'stem_diameter', 'QSM', 'cylinders',
-           'branches', 'summary', 'reach_tips', 'law_radii', 'measure_tree', 'qsm', 'qsm_tables', 'qsm_labels',
-           'write_qsm', 'read_cylinders']
+           'branches', 'summary', 'reach_tips', 'reach_forks', 'law_radii', 'measure_tree', 'qsm', 'qsm_tables',
+           'qsm_labels', 'write_qsm', 'read_cylinders']
 
 # %% ../nbs/09d_qsm.ipynb #6ac35601
 def example_in_metres(height: float = 8.0, base: float = 0.1, levels: int = 4, seed: int = 0) -> Tree:
@@ -502,6 +502,61 @@ def reach_tips(tree: Tree, points, segment, q: float = 0.95) -> Tree:
     return Tree(tree.start, end, tree.parent, check=False, origin=tree.origin, **tree.attrs)
 
 
+# %% ../nbs/09d_qsm.ipynb #8af081ae
+def _ray_to_segment(a, b, o, d) -> tuple:
+    """(distance, s in [0, 1] along a->b, t >= 0 back along the ray o - t d from o, d a unit vector) of the closest
+    approach of the two; where they run parallel, the one nearest o."""
+    u, w = b - a, a - o
+    uu, ud, uw, dw = float(u @ u), float(u @ d), float(u @ w), float(d @ w)
+    cands = [(0.0, max(0.0, -dw))]   # s = 0: t from projecting a on the ray
+    if uu > 0:
+        cands += [(1.0, max(0.0, -dw - ud)), (min(1.0, max(0.0, -uw / uu)), 0.0)]   # s = 1; t = 0
+        den = uu - ud * ud
+        if den > 1e-12 * uu:   # the unconstrained minimum, if inside
+            s = (ud * dw - uw) / den; t = -dw - s * ud
+            if 0 <= s <= 1 and t >= 0: cands.append((s, t))
+    best = min(cands, key=lambda c: (round(float(np.linalg.norm(a + c[0] * u - o + c[1] * d)), 12), c[1]))
+    return float(np.linalg.norm(a + best[0] * u - o + best[1] * d)), best[0], best[1]
+
+def reach_forks(tree: Tree, spacing: float, back: float = 2.0, cut: float = 4.0, min_angle: float = 10.0) -> Tree:
+    """`tree` with each side branch attached where its own line meets its parent's axis. Level sets see a branch
+    and its parent as one ring until their points part, so a skeleton's side branch starts late and joins its
+    parent by a shortcut; a steep branch loses most. Carried back along its first segments, a branch is
+    re-attached to the node of its parent's branch (at most `back` below) nearest to where it passes within the
+    parent's radius and 2 `spacing`s of the axis, if that is no further back than the two rings could have been one
+    ((parent radius + branch radius + `cut` spacings) / sine of the angle between them), and if the branch would
+    not then carry more than the parent's own continuation (it would take the parent's branch over). A branch within
+    `min_angle` degrees of its parent stays: where it meets the axis cannot be told (and a strip of bark that a hole
+    cut off from its stem looks just so)."""
+    st = branch_structure(tree); ext, gl = st["extension"], growth_length(tree)
+    par, start = tree.parent.copy(), tree.start.copy()
+    a_, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
+    r = tree.end[:, 3].astype(np.float64)
+    for h in np.flatnonzero((st["order"] > 0) & (st["position"] == 0) & (par >= 0)):
+        p, n1 = par[h], ext[h]
+        far = ext[n1] if n1 >= 0 and ext[n1] >= 0 else n1
+        d = e[far] - e[h] if far >= 0 else e[h] - e[p]
+        if not np.linalg.norm(d) > 0: continue
+        d = d / np.linalg.norm(d)
+        best, q, walked = None, p, 0.0
+        while walked <= back:
+            dist, s, t = _ray_to_segment(a_[q], e[q], e[h], d)
+            up = (e[q] - a_[q]) / max(np.linalg.norm(e[q] - a_[q]), 1e-12)
+            sine = math.sqrt(max(0.0, 1 - float(up @ d) ** 2))
+            if (sine >= math.sin(math.radians(min_angle)) and dist <= r[q] + 2 * spacing
+                    and t <= (r[q] + r[h] + cut * spacing) / sine):
+                if best is None or dist < best[0]: best = (dist, q, s)
+            walked += float(np.linalg.norm(e[q] - a_[q]))
+            if par[q] < 0 or ext[par[q]] != q: break   # along the parent's own branch only
+            q = par[q]
+        if best is None: continue
+        _, q, s = best
+        node = q if s >= 0.5 or par[q] < 0 else par[q]
+        if node == p or (ext[node] >= 0 and gl[h] >= gl[ext[node]]): continue
+        par[h] = node; start[h, :3] = tree.end[node, :3]
+    return Tree(start, tree.end, par, check=False, origin=tree.origin, **tree.attrs)
+
+
 # %% ../nbs/09d_qsm.ipynb #3ac0939f
 def _anchor(tree: Tree, fits, radii, trusted, dbh: float):
     """(segment, radius) that the taper law passes through: the stem's circle at 1.3 m (diameter `dbh`), else the
@@ -540,14 +595,16 @@ def law_radii(tree: Tree, fits, radii, trusted, anchor, name: str = "tree") -> t
 # %% ../nbs/09d_qsm.ipynb #8d1edaf4
 def measure_tree(tree: Tree, raw, labelled, name: str = "tree", seed: int = 0) -> QSM:
     """The `QSM` of one reconstructed `tree` (about its origin) from the scan's points `raw` (in the scan's
-    coordinates): the tips reach their points (`reach_tips`), the points `labelled` (a mask) are given to their
-    nearest segment, circles fitted, radii made honest, the stem measured at 1.3 m."""
+    coordinates): side branches reach back to their forks (`reach_forks`) and tips to their points (`reach_tips`),
+    the points `labelled` (a mask) are given to their nearest segment, circles fitted, radii made honest, the stem
+    measured at 1.3 m."""
     o = tree.origin
     p = np.asarray(raw, np.float64) - o
     s, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
     idx = np.flatnonzero(labelled)
     if len(idx) < 10: raise TreebookError(f"{name}: only {len(idx)} points lie on the tree: too few to measure")
     sp = _spacing(p[idx], seed=seed)
+    tree = reach_forks(tree, sp)   # points go to segments as they started: a branch carried back runs in its parent
     tree = reach_tips(tree, p[idx], _axis_distances(s, e, p[idx], 0.5 * sp)[0])
     seg, dist = _axis_distances(s, tree.end[:, :3].astype(np.float64), p[idx], 0.5 * sp)
     segment = np.full(len(p), -1, np.int64); segment[idx] = seg
