@@ -151,7 +151,7 @@ def segment_fits(tree: Tree, points, segment, window: int = 1, max_points: int =
 
 # %% ../nbs/09d_qsm.ipynb #64ff770d
 def trusted_fits(tree: Tree, fits, spacing: float, min_points: int = 12, min_cover: float = 0.5,
-                 max_rms: float = 0.25, min_spacings: float = 2.0, skip: int = 2, k: int = 2) -> tuple:
+                 max_rms: float = 0.25, min_spacings: float = 1.0, skip: int = 2, k: int = 2) -> tuple:
     """(radii (n,), mask) of the fits to trust: at least `min_points` points covering `min_cover` of the circle, an
     rms under `max_rms` of the radius, a radius of `min_spacings` point spacings or more, and not among the first
     `skip` segments of a side branch (their circles take in the parent's bark). Trusted radii are running medians of
@@ -174,22 +174,24 @@ def trusted_fits(tree: Tree, fits, spacing: float, min_points: int = 12, min_cov
 # %% ../nbs/09d_qsm.ipynb #f49830b0
 def taper_law(tree: Tree, radii, trusted, anchor: tuple | None = None,
               exponents=(0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.6), default: float = 0.4, min_range: float = 20.0,
-              min_branches: int = 3) -> tuple:
+              min_branches: int = 3, min_circles: int = 30) -> tuple:
     """(k, b, measured) of the tree's own taper law r = k (growth length)^b, from its `trusted` `radii`. With an
     `anchor` (segment, radius), the law passes through it: the stem's diameter at 1.3 m, measured on its own points, is
     the surest radius of a tree, and b (between the least and the largest of `exponents`, in steps of 0.01) is the one
     under which the side branches' trusted radii sit on the law in the median (if that is the least of them, the circles
     are wider than branches can be, widened by noise or leaves, and b is `default`). Without one, b is the one of
     `exponents` under which all trusted radii agree best (least median deviation in log). When they lie on fewer than
-    `min_branches` side branches or span less than `min_range` in growth length, b cannot be told (a stem tapers by
-    other rules than its branches) and is `default`: the pipe model's 1/2.5 (a cross-section carries the wood above it).
-    `measured` says whether b was measured (False where it is `default`)."""
+    `min_branches` side branches, number fewer than `min_circles` there (a median of a few circles moves with each one),
+    or span less than `min_range` in growth length, b cannot be told (a stem tapers by other rules than its branches)
+    and is `default`: the pipe model's 1/2.5 (a cross-section carries the wood above it). `measured` says whether b was
+    measured (False where it is `default`)."""
     r, ok = np.asarray(radii, np.float64), np.asarray(trusted, bool)
     if not ok.any() and anchor is None: raise TreebookError("taper_law needs a trusted radius or an anchor")
     lgl = np.log(growth_length(tree)); st = branch_structure(tree)
     side = np.unique(st["branch"][ok & (st["order"] > 0)])
     wide = ok.any() and np.ptp(lgl[ok]) >= math.log(min_range)
-    bs = exponents if len(side) >= min_branches and wide else ()
+    enough = len(side) >= min_branches and (ok & (st["order"] > 0)).sum() >= min_circles
+    bs = exponents if enough and wide else ()
     x, g = np.log(r[ok]), lgl[ok]
     def k_of(b): return (math.log(anchor[1]) - b * lgl[anchor[0]]) if anchor is not None else np.median(x - b * g)
     if anchor is not None and len(bs) > 1:   # side branches (most of the wood above the stem) sit on the law
@@ -300,10 +302,11 @@ def trunk_radius_at(tree: Tree, height: float) -> float:
 
 # %% ../nbs/09d_qsm.ipynb #9cf2f681
 def stem_diameter(points, tree: Tree, height: float = 1.3, band: float = 0.05) -> tuple:
-    """(diameter, centre x y) of the stem `height` above the base of `tree`, from a circle fitted to the `points`
-    within `band` of that height and near the trunk (within twice its radius and 5 cm); (NaN, None) when they are too
-    few or cover too little of a circle. The circle's rms s is taken as noise: a radius r fitted through it is
-    sqrt(r^2 - s^2). `points` and `tree` in the same frame, in metres."""
+    """(diameter, centre x y) of the stem `height` above the base of `tree`, from a circle fitted to the `points` within
+    `band` of that height and near the trunk (within twice its radius and 5 cm); (NaN, None) when they are too few or
+    cover too little of a circle. The radius is the median distance of the points from the circle's centre (a point
+    moved off the bark in a random direction lands further out on average), and the circle's rms s is taken as noise: a
+    radius r through it is sqrt(r^2 - s^2). `points` and `tree` in the same frame, in metres."""
     p = np.asarray(points, np.float64)
     trunk = _trunk(tree)
     if not len(trunk): return float("nan"), None
@@ -323,9 +326,12 @@ def stem_diameter(points, tree: Tree, height: float = 1.3, band: float = 0.05) -
     xy = np.c_[(q - centre) @ A, (q - centre) @ B]
     xy = xy[np.linalg.norm(xy, axis=1) <= reach]
     if len(xy) < 10: return float("nan"), None
-    c, r, rms, keep = fit_circle(xy)
+    def circle(q):   # noise moves points outward more than inward: the median distance from the centre
+        c, _, rms, keep = fit_circle(q)
+        return c, float(np.median(np.linalg.norm(q[keep] - c, axis=1))), rms, keep
+    c, r, rms, keep = circle(xy)
     near = np.abs(np.linalg.norm(xy - c, axis=1) - r) <= 0.5 * r   # again, on the points near the first circle
-    if 10 <= near.sum() < len(xy): xy = xy[near]; c, r, rms, keep = fit_circle(xy)
+    if 10 <= near.sum() < len(xy): xy = xy[near]; c, r, rms, keep = circle(xy)
     ang = np.arctan2(*(xy[keep] - c).T[::-1])
     cover = len(np.unique(((ang + np.pi) / (2 * np.pi) * 12).astype(int) % 12)) / 12
     if cover < 0.4 or r > reach or rms > 0.3 * r: return float("nan"), None
