@@ -8,8 +8,6 @@ from treebook.scan import scan
 from treebook.tree import TreebookError
 
 
-
-
 @pytest.fixture(scope="module")
 def measured():
     truth = example_in_metres()

@@ -252,7 +252,6 @@ def branch_levels(tree: Tree, radii, trusted, law: tuple) -> np.ndarray:
         elif tree.parent[seg[0]] >= 0: level[seg] = level[tree.parent[seg[0]]]
     return level
 
-
 # %% ../nbs/09d_qsm.ipynb #1bdbf101
 def with_radii(tree: Tree, radii) -> Tree:
     """`tree` with radius `radii` (n,) at the end of each segment; a segment that goes on its parent's branch starts
@@ -507,7 +506,6 @@ def reach_tips(tree: Tree, points, segment, q: float = 0.95) -> Tree:
     end[go, :3] = e[go] + u[go] * np.minimum(beyond[go], L[go])[:, None]
     return Tree(tree.start, end, tree.parent, check=False, origin=tree.origin, **tree.attrs)
 
-
 # %% ../nbs/09d_qsm.ipynb #8af081ae
 def _ray_to_segment(a, b, o, d) -> tuple:
     """(distance, s in [0, 1] along a->b, t >= 0 back along the ray o - t d from o, d a unit vector) of the closest
@@ -537,7 +535,8 @@ def reach_forks(tree: Tree, spacing: float, back: float = 2.0, cut: float = 4.0,
     st = branch_structure(tree); ext, gl = st["extension"], growth_length(tree)
     par, start = tree.parent.copy(), tree.start.copy()
     a_, e = tree.start[:, :3].astype(np.float64), tree.end[:, :3].astype(np.float64)
-    r = tree.end[:, 3].astype(np.float64)
+    r, L = tree.end[:, 3].astype(np.float64), np.linalg.norm(e - a_, axis=1)
+    up = (e - a_) / np.maximum(L, 1e-12)[:, None]
     for h in np.flatnonzero((st["order"] > 0) & (st["position"] == 0) & (par >= 0)):
         p, n1 = par[h], ext[h]
         far = ext[n1] if n1 >= 0 and ext[n1] >= 0 else n1
@@ -547,12 +546,11 @@ def reach_forks(tree: Tree, spacing: float, back: float = 2.0, cut: float = 4.0,
         best, q, walked = None, p, 0.0
         while walked <= back:
             dist, s, t = _ray_to_segment(a_[q], e[q], e[h], d)
-            up = (e[q] - a_[q]) / max(np.linalg.norm(e[q] - a_[q]), 1e-12)
-            sine = math.sqrt(max(0.0, 1 - float(up @ d) ** 2))
+            sine = math.sqrt(max(0.0, 1 - float(up[q] @ d) ** 2))
             if (sine >= math.sin(math.radians(min_angle)) and dist <= r[q] + 2 * spacing
                     and t <= (r[q] + r[h] + cut * spacing) / sine):
                 if best is None or dist < best[0]: best = (dist, q, s)
-            walked += float(np.linalg.norm(e[q] - a_[q]))
+            walked += L[q]
             if par[q] < 0 or ext[par[q]] != q: break   # along the parent's own branch only
             q = par[q]
         if best is None: continue
@@ -561,7 +559,6 @@ def reach_forks(tree: Tree, spacing: float, back: float = 2.0, cut: float = 4.0,
         if node == p or (ext[node] >= 0 and gl[h] >= gl[ext[node]]): continue
         par[h] = node; start[h, :3] = tree.end[node, :3]
     return Tree(start, tree.end, par, check=False, origin=tree.origin, **tree.attrs)
-
 
 # %% ../nbs/09d_qsm.ipynb #3ac0939f
 def _anchor(tree: Tree, fits, radii, trusted, dbh: float):
@@ -638,7 +635,7 @@ def qsm(src, up: str = "z", foliage=False, trees: str = "joined", seed: int = 0,
     by `measure_tree`. A `QSM`, or with `trees='all'` a list of them (largest first; trees too short to measure at 1.3 m
     are left out with a warning)."""
     raw = read_points(src, up=up)
-    if max_points is None: max_points = 60_000 if foliage is not False else 200_000   # see the text
+    if max_points is None: max_points = 60_000 if foliage is not False else 200_000   # the leaf net's density
     name = name or (Path(src).stem if isinstance(src, (str, Path)) else "tree")
     made = reconstruct(raw, method="classic", foliage=foliage, seed=seed, trees=trees, max_points=max_points,
                        min_share=0.001, return_info=True)
