@@ -74,20 +74,22 @@ elm:
 # SPECIES=spruce` grows data/spruce (TREES trees up to the preset's max_branches), trains runs/spruce by the elm's
 # recipe in calls of 100 minutes (a call that ends before the schedule does exits with status 3: run the same command
 # again), then evaluates it and ships spruce.{pt,tok.json,md}, results/spruce_eval.json and results/spruce_loss.png.
-# TRAIN_FLAGS go to the training (e.g. --window 128). A run from `scripts/gpu.sh species`: `$(PY) -m
+# TRAIN_FLAGS go to the training (e.g. --window 128), SHIP_FLAGS to the evaluation (e.g. --n-samples 500 --n-test
+# 500: the held-out trees it is scored against). A run from `scripts/gpu.sh species`: `$(PY) -m
 # treebook.species_runs unpack OUT/spruce.tar runs/spruce-gpu`, then `make species SPECIES=spruce
 # SPECIES_RUN=runs/spruce-gpu TREES=...` (TREES as on the GPU): the run is evaluated and shipped as it is.
 SPECIES ?= spruce
 TREES ?= 10000
 SPECIES_RUN ?= runs/$(SPECIES)
 TRAIN_FLAGS ?=
+SHIP_FLAGS ?=
 species:
 	$(PY) -m treebook.species_runs data $(SPECIES) --trees $(TREES) --workers 2
 	$(PY) -m treebook.species_runs train $(SPECIES) --run $(SPECIES_RUN) --threads 2 --time-limit 6000 --quiet $(TRAIN_FLAGS)
-	$(PY) scripts/ship_elm.py --species $(SPECIES) --run $(SPECIES_RUN) --temperature 1.0 --top-p 1.0 \
+	$(PY) scripts/ship_elm.py --species $(SPECIES) --run $(SPECIES_RUN) --temperature 1.0 --top-p 1.0 $(SHIP_FLAGS) \
 	    --recipe "make species SPECIES=$(SPECIES)$(if $(filter 10000,$(TREES)),, TREES=$(TREES))$(if \
 	    $(filter runs/$(SPECIES),$(SPECIES_RUN)),, SPECIES_RUN=$(SPECIES_RUN))$(if $(strip $(TRAIN_FLAGS)),\
-	    TRAIN_FLAGS='$(strip $(TRAIN_FLAGS))')"
+	    TRAIN_FLAGS='$(strip $(TRAIN_FLAGS))')$(if $(strip $(SHIP_FLAGS)), SHIP_FLAGS='$(strip $(SHIP_FLAGS))')"
 
 clean:
 	rm -rf build dist *.egg-info treebook-demo _proc

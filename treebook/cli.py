@@ -735,7 +735,8 @@ for key, name, target, sub in [
          "treebook.demos:demo_foliage", "foliage"),
         ("measure", "a scanned tree measured: cylinder model, volume, DBH and length beside the truth (09d)",
          "treebook.demos:demo_measure", "measure"),
-        ("sample", "trees sampled from the shipped elm model (HourglassTree)", "treebook.train:demo_sample", "sample"),
+        ("sample", "trees sampled from each species' shipped model, beside procedural ones (HourglassTree)",
+         "treebook.train:demo_sample", "sample"),
         ("growth", "a growing tree (4D) and an image-to-tree result", "treebook.demos:demo_growth", "growth")]:
     demo_step(key, name)(_lazy_step(target, sub))
 

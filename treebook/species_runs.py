@@ -30,7 +30,8 @@ from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
 __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'ship_parser', 'ship_main', 'pace', 'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs', 'parser', 'main']
+           'recard', 'ship_parser', 'ship_main', 'models_table', 'pace', 'plan_steps', 'pack_run', 'unpack_run',
+           'gpu_runs', 'parser', 'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -59,9 +60,10 @@ def run_status(run) -> dict | None:
 # %% ../nbs/05a_species_runs.ipynb #f38bc9c4
 def species_train(name: str, run=None, data=None, device: str = "cpu", threads: int | None = None,
                   time_limit: float | None = None, stop_after: int | None = None, progress: bool = True,
-                  **recipe) -> dict:
+                  init=None, **recipe) -> dict:
     """Train, or go on training, the model of species `name` in `run` (default runs/NAME) on `data` (default
-    data/NAME) by `RECIPE`, which `recipe` overrides; returns the run's `run_status` after the call."""
+    data/NAME) by `RECIPE`, which `recipe` overrides; returns the run's `run_status` after the call. A new run may
+    start from a trained model (`init`, e.g. the species' shipped one: see `train`)."""
     if set(recipe) - set(RECIPE):
         raise TreebookError(f"not in the recipe: {', '.join(sorted(set(recipe) - set(RECIPE)))}")
     sp = _species(name)
@@ -69,7 +71,7 @@ def species_train(name: str, run=None, data=None, device: str = "cpu", threads: 
     st = run_status(run)
     if st and (st["done"] or not st["weights"]): return st
     train(data, run, **(RECIPE | recipe), device=device, threads=threads, time_limit=time_limit,
-          stop_after=stop_after, resume=st is not None, progress=progress)
+          stop_after=stop_after, resume=st is not None, progress=progress, init=init)
     return run_status(run)
 
 # %% ../nbs/05a_species_runs.ipynb #750ff115
@@ -88,6 +90,7 @@ def _card_head(res: dict, max_len: int) -> str:
     how = f"`{run['trained_by']}` (training), then `{cmd}`" if run.get("trained_by") else f"`{cmd}` (resumable)"
     where = run.get("device") or "2 shared CPU cores"
     window = f", window {ar['window']} in the full-resolution layers" if ar.get("window") else ""
+    start = f"; started from the weights of `{ar['init']}`" if ar.get("init") else ""
     return f"""# {name}: a {ar['order'].upper()} / {ar['arch'].capitalize()} hourglass transformer for procedural \
 {PLURAL[name]}
 
@@ -98,7 +101,7 @@ branches, {res['branches_mean']:.0f} on average in the samples.
 {run['n_params']:,} parameters, max_len {max_len}{window}.
 - **Training**: AdamW (betas 0.9/0.95, weight decay {ar['weight_decay']}), peak lr {ar['lr']}, {ar['warmup']} warm-up \
 steps then cosine to a tenth, batch {ar['batch_size']} x {ar['world']} process(es), gradient clipping \
-{ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}; {run['last_step']} steps{stopped} \
+{ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}{start}; {run['last_step']} steps{stopped} \
 ({epochs:.2f} epochs) in {(run['train_seconds'] or 0) / 60:.0f} minutes on {where}. Shipped weights: step \
 {run['best_step']} (lowest validation loss on {ar['val_trees']} held-out trees).
 - **Command**: {how}, which ends with `{res['command']}`.
@@ -130,7 +133,7 @@ def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100)
 - Connect with structure-aware decoding: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
 without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f})
 
-## Against the issue's quality figures
+## Against the figures every species' model is held to
 
 """ + "\n".join(f"- {k}: {'met' if v else 'NOT met'}" for k, v in res["targets"].items()) + "\n"
 
@@ -177,13 +180,15 @@ def _run_record(run: Path, data: Path, ckpt: str, net, n_test: int, n_train: int
 # %% ../nbs/05a_species_runs.ipynb #53171142
 def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: int = 50, seed: int = 0,
                  temperature: float = 0.9, top_p: float = 0.95, workers: int = 2, limit: int | None = None,
-                 ckpt: str = "best.pt", progress: bool = True) -> dict:
-    "The evaluation record of the run in `run` on the held-out split of `data`: PPL, Connect, scores, targets."
+                 ckpt: str = "best.pt", progress: bool = True, n_test: int | None = None) -> dict:
+    """The evaluation record of the run in `run` on the held-out split of `data` (its first `n_test` trees, if
+    given): PPL, Connect, scores, targets."""
     from treebook.metrics import tree_clouds, evaluate, fpd, load_species_pointnet, quality_targets, sample_scores
     run, data = Path(run), Path(data)
     net, tok = TreeTransformer.load(run / ckpt), Tokenizer.load(run / "tokenizer.json")
     test, train_ = load_trees(data, "test"), load_trees(data, "train")
     if limit: test, train_ = test[:limit], train_[:limit]   # a smoke test only
+    if n_test: test = test[:n_test]
     res = _run_record(run, data, ckpt, net, len(test), len(train_))
     res["sampling"] = {"n": n_samples, "temperature": temperature, "top_p": top_p, "seed": seed}
     t = time.time(); ppl = perplexity(net, tok.encode_batch(test, res["run"]["args"]["order"]), 8, progress)
@@ -209,6 +214,22 @@ def ship_run(run, res: dict, card: str, weights=WEIGHTS, results=None, ckpt: str
         out.append(Path(results) / f"{name}_loss.png"); shutil.copyfile(run / "loss.png", out[-1])
     return out
 
+# %% ../nbs/05a_species_runs.ipynb #a22e02ef
+def recard(name: str, record, weights=WEIGHTS, batch: int = 50, n_connect: int = 100) -> dict:
+    """The card of the shipped model `name` anew from its evaluation record (a path), whose targets `quality_targets`
+    computes again and writes back: for when the figures a model is held to change. Returns the record."""
+    from treebook.metrics import quality_targets
+    record, weights = Path(record), Path(weights)
+    if not record.is_file(): raise TreebookError(f"no evaluation record {record}: evaluate the run first")
+    if not (weights / f"{name}.pt").is_file(): raise TreebookError(f"no model {weights / name}.pt ships")
+    res = json.loads(record.read_text())
+    res["targets"] = quality_targets(res)
+    _atomic_write(record, lambda f: f.write(json.dumps(res, indent=1).encode()))
+    card = species_card(res, TreeTransformer.load(weights / f"{name}.pt").config.max_len, batch, n_connect)
+    _atomic_write(weights / f"{name}.md", lambda f: f.write(card.encode()))
+    return res
+
+
 # %% ../nbs/05a_species_runs.ipynb #9cd1e1d8
 def ship_parser() -> argparse.ArgumentParser:
     "The flags of `scripts/ship_elm.py`: the species (default elm), its run and data, and how the evaluation samples."
@@ -216,10 +237,13 @@ def ship_parser() -> argparse.ArgumentParser:
                                 "of its dataset and ship it: weights, tokenizer and model card into the package.")
     p.add_argument("--species", default="elm", help="the species (default elm); runs/NAME and data/NAME by default")
     for k, v in dict(run=None, data=None, n_samples=1000, n_connect=100, batch=50, seed=0, temperature=0.9,
-                     top_p=0.95, threads=2, workers=2, limit=None, ckpt="best.pt", out_json=None, recipe=None).items():
-        kind = int if k == "limit" else str if v is None else type(v)
+                     top_p=0.95, threads=2, workers=2, limit=None, n_test=None, ckpt="best.pt", out_json=None,
+                     recipe=None).items():
+        kind = int if k in ("limit", "n_test") else str if v is None else type(v)
         p.add_argument(f"--{k.replace('_', '-')}", default=v, type=kind)
     p.add_argument("--no-ship", action="store_true")
+    p.add_argument("--recard", action="store_true", help="no evaluation: the card (and the record's targets) anew "
+                   "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
     return p
 
 # %% ../nbs/05a_species_runs.ipynb #c1f6290a
@@ -228,11 +252,13 @@ def ship_main(argv=None, record=None, weights=WEIGHTS, results=None) -> dict:
     provenance), and unless --no-ship, `ship_run` with its `species_card`. Returns the record."""
     a = ship_parser().parse_args(argv)
     name = _species(a.species).name
+    if a.recard: return recard(name, a.out_json or Path(results or "results") / f"{name}_eval.json", weights,
+                               a.batch, a.n_connect)
     run, data = Path(a.run or f"runs/{name}"), Path(a.data or f"data/{name}")
     if load_manifest(data)["config"]["species"] != name: raise TreebookError(f"{data} holds no {name} dataset")
     torch.set_num_threads(a.threads)
     res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
-                       a.limit, a.ckpt)
+                       a.limit, a.ckpt, n_test=a.n_test)
     res["recipe"] = a.recipe or ("make elm" if name == "elm" else f"make species SPECIES={name}")
     res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
                                                       threads=a.threads, torch=torch.__version__)
@@ -241,6 +267,23 @@ def ship_main(argv=None, record=None, weights=WEIGHTS, results=None) -> dict:
         card = species_card(res, TreeTransformer.load(run / a.ckpt).config.max_len, a.batch, a.n_connect)
         ship_run(run, res, card, weights, results, a.ckpt); print(card)
     return res
+
+# %% ../nbs/05a_species_runs.ipynb #f8cd07cf
+def models_table(results="results") -> str:
+    "A markdown table of every shipped species' model, from its evaluation record `results`/NAME_eval.json."
+    from treebook.train import shipped_species
+    rows = ["| species | trained on | steps | held-out trees | 1-NNA | COV-CD | MMD-CD / ref. | Connect, free | "
+            "whole trees, free | figures met |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for name in shipped_species():
+        p = Path(results) / f"{name}_eval.json"
+        if not p.is_file(): raise TreebookError(f"{name} ships without its record {p}: run scripts/ship_elm.py")
+        r = json.loads(p.read_text())
+        s, ref, cf, run = r["scores"], r["reference_train_vs_test"], r["Connect_free"], r["run"]
+        rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {run['last_step']:,} | "
+                    f"{r['data']['test']} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
+                    f"{cf['Connect']:.3f} | {cf['Connected']:.2f} | {sum(r['targets'].values())} of "
+                    f"{len(r['targets'])} |")
+    return "\n".join(rows)
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949
 def pace(log_csv) -> float | None:
@@ -363,6 +406,7 @@ def parser() -> argparse.ArgumentParser:
     t.add_argument("--run", default=None, help="default runs/NAME"); t.add_argument("--device", default="cpu")
     t.add_argument("--threads", type=int); t.add_argument("--time-limit", type=float)
     t.add_argument("--stop-after", type=int); t.add_argument("--quiet", action="store_true")
+    t.add_argument("--init", default=None, help="a new run starts from this model (e.g. the species' shipped one)")
     g.add_argument("seconds", type=float); g.add_argument("outdir"); g.add_argument("species", nargs="+")
     g.add_argument("--device", default="cuda"); g.add_argument("--probe", type=int, default=40)
     g.add_argument("--root", default="runs/gpu", help="where the runs train (default runs/gpu)")
@@ -384,7 +428,7 @@ def main(argv=None) -> int:
                          a.max_branches, "scripts/gpu.sh species " + " ".join(argv[1:]), **recipe)
             return 0 if all(r["exit"][n] in (0, 3) for n in a.species) else 1
         st = species_train(a.species, a.run, a.data, a.device, a.threads, a.time_limit, a.stop_after, not a.quiet,
-                           **recipe)
+                           a.init, **recipe)
     except TreebookError as e: print(f"error: {e}", file=sys.stderr); return 2
     print(json.dumps(st))
     if st["done"] or not st["weights"]: return 0

@@ -30,7 +30,7 @@ from .datasets import load_manifest, load_trees
 
 # %% auto #0
 __all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'shipped_species',
-           'species_model', 'sample_trees', 'demo_sample', 'main']
+           'species_model', 'sample_trees', 'sampled_gallery', 'demo_sample', 'main']
 
 # %% ../nbs/05_train.ipynb #7ba35ceb
 def sequence_loss(model, seqs) -> tuple:
@@ -163,18 +163,22 @@ def _train_val(data_dir, max_train, val_trees: int, batch_size: int, world: int)
     return train_set, val_set
 
 # %% ../nbs/05_train.ipynb #cc7a1bc5
-def _run_tokenizer(out_dir, train_set, args: dict, resume: bool, rank: int) -> tuple:
-    "(Tokenizer, checkpoint of last.pt or None) of the run in `out_dir`: fitted and saved, or read back on `resume`."
+def _run_tokenizer(out_dir, train_set, args: dict, resume: bool, rank: int, start=None) -> tuple:
+    """(Tokenizer, checkpoint of last.pt or None) of the run in `out_dir`: fitted and saved (or that of the model
+    `start` the run starts from), or read back on `resume`."""
     if resume:
         ckpt = _load_state(out_dir / "last.pt")
-        stored = {k: v for k, v in {"window": 0, **ckpt["args"]}.items() if k not in ("steps",)}   # runs before window
+        stored = {k: v for k, v in {"window": 0, "init": None, **ckpt["args"]}.items()   # runs before window, init
+                  if k not in ("steps",)}
         mine = {k: v for k, v in args.items() if k not in ("steps",)}
         if stored != mine:
             diff = {k: (stored.get(k), mine.get(k)) for k in set(stored) | set(mine) if stored.get(k) != mine.get(k)}
             raise TreebookError(f"--resume with other settings than the run in {out_dir} (stored, given): {diff}")
         return Tokenizer.load(out_dir / "tokenizer.json"), ckpt
-    fit_on = [augment(t, args["seed"], 10 ** 6, i) for i, t in enumerate(train_set[:2000])]
-    tok = Tokenizer.fit(train_set[:2000] + fit_on)
+    if start is not None: tok = start
+    else:
+        fit_on = [augment(t, args["seed"], 10 ** 6, i) for i, t in enumerate(train_set[:2000])]
+        tok = Tokenizer.fit(train_set[:2000] + fit_on)
     out_dir.mkdir(parents=True, exist_ok=True)
     if rank == 0: tok.save(out_dir / "tokenizer.json")
     return tok, None
@@ -282,6 +286,17 @@ def _loop(run: _Run, net, sampler, batch_seqs, total: int, every: tuple, stop, b
                 return last_val
     return last_val
 
+# %% ../nbs/05_train.ipynb #3b7cb011
+def _start_from(init, config) -> tuple:
+    "(model, tokenizer) of `init` (a shipped model's name or a checkpoint) for a run whose model is `config`."
+    model, tok = load_pretrained(str(init))
+    if model.config != config:
+        theirs, mine = asdict(model.config), asdict(config)
+        diff = {k: (theirs[k], mine[k]) for k in mine if theirs[k] != mine[k]}
+        raise TreebookError(f"init {init}: its model is not the one this run trains (init, run): {diff}")
+    return model, tok
+
+
 # %% ../nbs/05_train.ipynb #cc80cbcd
 def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 128, depth: int = 8, heads: int = 4,
           batch_size: int = 8, epochs: int = 1, steps: int | None = None, lr: float = 2e-3, warmup: int = 100,
@@ -289,11 +304,13 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
           val_trees: int = 256, ckpt_every: int = 50, log_every: int = 10, max_train: int | None = None,
           stop_after: int | None = None, time_limit: float | None = None, threads: int | None = None,
           resume: bool = False, seed: int = 0, progress: bool = True, rank_weights: bool = False, window: int = 0,
-          device: str = "cpu") -> dict:
+          device: str = "cpu", init=None) -> dict:
     """Train a `TreeTransformer` on the dataset in `data_dir`; files go to `out_dir` (see above).
     `steps` (default: `epochs` of the training split) sets the schedule's length; `stop_after` ends this call after
     that many steps in all (a planned interruption: resume later), `time_limit` after that many seconds of this call;
-    `rank_weights` makes every process write its final weights to `rank<r>.pt` (to check that they agree)."""
+    `rank_weights` makes every process write its final weights to `rank<r>.pt` (to check that they agree); `init`
+    (a shipped model's name or a checkpoint) starts from that model's weights and tokenizer, with a fresh optimizer
+    and schedule."""
     _check_train_args(**locals())
     data_dir, out_dir = _open_run(data_dir, out_dir, resume)
     if threads: torch.set_num_threads(int(threads))
@@ -302,11 +319,13 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads,
                 batch_size=batch_size, world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup,
                 weight_decay=weight_decay, grad_clip=grad_clip, augment=augment_data, val_trees=len(val_set),
-                max_train=max_train, seed=seed, window=window)
-    tok, ckpt = _run_tokenizer(out_dir, train_set, args, resume, rank)
+                max_train=max_train, seed=seed, window=window, init=None if init is None else str(init))
     config = ModelConfig(arch=arch, dim=dim, depth=depth, heads=heads,
                          max_len=max(t.n for t in train_set + val_set) * 8 + 16, window=window)
+    start = _start_from(init, config) if init is not None and not resume else (None, None)
+    tok, ckpt = _run_tokenizer(out_dir, train_set, args, resume, rank, start[1])
     model, opt = _model_opt(config, seed, lr, weight_decay, ckpt, device)
+    if start[0] is not None: model.load_state_dict(start[0].state_dict())
     sampler = torch.utils.data.DistributedSampler(range(len(train_set)), num_replicas=world, rank=rank, shuffle=True,
                                                   seed=seed, drop_last=True)
     net = torch.nn.parallel.DistributedDataParallel(model, find_unused_parameters=True) if world > 1 else model
@@ -401,18 +420,34 @@ def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0
     return trees
 
 # %% ../nbs/05_train.ipynb #a9fa5931
-def demo_sample(out_dir, seed: int = 0, n: int = 4) -> list:
-    ("Sample `n` trees from the shipped elm model into `out_dir`: .npz and .obj each, and one PNG grid; returns the "
-     "paths.")
-    from treebook.mesh import export_mesh
+def sampled_gallery(n: int = 2, seed: int = 0, size: int = 200, samples: dict | None = None):
+    """A PIL image with a row for each species: `n` procedural trees (chapter 02), then `n` sampled from the species'
+    shipped model (`samples` maps a species to trees already drawn), or blank tiles where no model ships yet."""
+    from PIL import Image
+    from treebook.botany import SPECIES, grow_tree
     from treebook.render import render, image_grid
+    have, samples, tiles, labels = shipped_species(), dict(samples or {}), [], []
+    for name in SPECIES:
+        made = samples.get(name) or (sample_trees(n, species=name, seed=seed) if name in have else [None] * n)
+        for kind, trees in (("procedural", [grow_tree(name, seed=seed + i) for i in range(n)]), ("model", made)):
+            for t in trees[:n]:
+                tiles.append(Image.new("RGB", (size, size), "white") if t is None else
+                             render(t, view="front", size=(size, size)))
+                labels.append(f"{name}: no model yet" if t is None else f"{name} {kind} {t.n}")
+    return image_grid(tiles, ncols=2 * n, labels=labels)
+
+# %% ../nbs/05_train.ipynb #e67d6dd0
+def demo_sample(out_dir, seed: int = 0, n: int = 2) -> list:
+    """Sample `n` trees from each species' shipped model into `out_dir` (sampled_NAME_i.npz and .obj) and picture them
+    beside procedural trees of their species (`sampled_gallery.png`); returns the paths."""
+    from treebook.mesh import export_mesh
     out_dir = Path(out_dir); out_dir.mkdir(parents=True, exist_ok=True)
-    trees, paths, images = sample_trees(n, seed=seed), [], []
-    for i, t in enumerate(trees):
-        paths += [t.save(out_dir / f"sampled_elm_{i}.npz"), export_mesh(t, out_dir / f"sampled_elm_{i}.obj")]
-        images.append(render(t, size=(256, 256)))
-    grid = image_grid(images, labels=[f"seed {seed}, #{i}" for i in range(n)])
-    paths.append(_atomic_write(out_dir / "sampled_elm.png", lambda f: grid.save(f, format="png")))
+    samples, paths = {name: sample_trees(n, species=name, seed=seed) for name in shipped_species()}, []
+    for name, trees in samples.items():
+        for i, t in enumerate(trees):
+            paths += [t.save(out_dir / f"sampled_{name}_{i}.npz"), export_mesh(t, out_dir / f"sampled_{name}_{i}.obj")]
+    grid = sampled_gallery(n, seed, samples=samples)
+    paths.append(_atomic_write(out_dir / "sampled_gallery.png", lambda f: grid.save(f, format="png")))
     return paths
 
 # %% ../nbs/05_train.ipynb #633825fb
@@ -436,6 +471,7 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
     p.add_argument("--no-augment", action="store_true"); p.add_argument("--resume", action="store_true")
     p.add_argument("--quiet", action="store_true"); p.add_argument("--rank-weights", action="store_true")
     p.add_argument("--device", default="cpu", help="cpu (default) or cuda")
+    p.add_argument("--init", default=None, help="start from this model's weights and tokenizer (a shipped name or .pt)")
     a = p.parse_args(argv)
     r = train(a.data, a.out, order=a.order, arch=a.arch, dim=a.dim, depth=a.depth, heads=a.heads,
               batch_size=a.batch_size,
@@ -444,7 +480,7 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
               val_every=a.val_every, val_trees=a.val_trees, ckpt_every=a.ckpt_every, max_train=a.max_train,
               stop_after=a.stop_after, time_limit=a.time_limit, threads=a.threads, resume=a.resume, seed=a.seed,
               progress=not a.quiet,
-              rank_weights=a.rank_weights, window=a.window, device=a.device)
+              rank_weights=a.rank_weights, window=a.window, device=a.device, init=a.init)
     r.pop("model")
     if int(os.environ.get("RANK", "0")) == 0: print(json.dumps(r))
     return r
