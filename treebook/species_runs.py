@@ -30,8 +30,8 @@ from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
 __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'recard', 'ship_parser', 'ship_main', 'models_table', 'pace', 'plan_steps', 'pack_run', 'unpack_run',
-           'gpu_runs', 'parser', 'main']
+           'recard', 'ship_parser', 'ship_main', 'models_table', 'parent_gaps', 'pace', 'plan_steps', 'pack_run',
+           'unpack_run', 'gpu_runs', 'parser', 'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -285,6 +285,28 @@ def models_table(results="results") -> str:
                     f"{r['data']['test']} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
                     f"{cf['Connect']:.3f} | {cf['Connected']:.2f} | {sum(met.values())} of {len(met)} |")
     return "\n".join(rows)
+
+# %% ../nbs/05a_species_runs.ipynb #7eb5352c
+def parent_gaps(tokens, tok) -> tuple:
+    """(gap, anchored) for each branch of the token sequence `tokens` after the first that does not start in the root
+    cell: how many branches back its parent lies (the latest earlier branch that ends in its start cell or, where
+    none does, the earlier branch whose end cell is nearest), and whether Connect counts it (another ends there)."""
+    from collections import Counter
+    from .tokens import _as_tokens, _parse
+    V = _parse(_as_tokens(tokens, False), False)[0].astype(np.int64)
+    S, E = V[:, :3], V[:, 4:7]
+    key = lambda P: (P[:, 0] * 65536 + P[:, 1] * 256 + P[:, 2]).tolist()
+    sk, ek = key(S), key(E)
+    n_end, last, gaps, anchored = Counter(ek), {}, [], []
+    for i in range(len(V)):
+        if i and sk[i] != tok.root_key:
+            j = last.get(sk[i])
+            if j is None:  # no earlier end here: the nearest earlier end (Chebyshev, in cells), the latest on ties
+                d = np.abs(E[:i] - S[i]).max(1)
+                j = i - 1 - int(np.argmin(d[::-1]))
+            gaps.append(i - j); anchored.append(n_end[sk[i]] - (ek[i] == sk[i]) > 0)
+        last[ek[i]] = i
+    return np.array(gaps, np.int64), np.array(anchored, bool)
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949
 def pace(log_csv) -> float | None:

@@ -1,0 +1,65 @@
+"""How far back a branch's parent lies, in procedural trees and in trees each shipped model samples without
+structure-aware decoding, and how often such a branch is connected (chapter 05a, `parent_gaps`).
+
+A model trained with `window=W` sees the last W/8 branches in its full-resolution layers: a parent further back
+("far") is reached only through the shortened layers. For each species whose model ships: the share of far parents
+in --trees procedural trees (the model's branch cap), and over --n free samples Connect of the branches whose parent
+(or nearest earlier end) is near and of those whose is far. Writes results/reach.json, keeping the species it holds
+that this call does not run.
+
+    .venv/bin/python benchmarks/reach.py                                  # 48 samples a species, some minutes
+    .venv/bin/python benchmarks/reach.py --species elm --n 4 --trees 4 --out tmp/reach.json   # a check
+"""
+import argparse, json, os, sys, time
+from pathlib import Path
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+import provenance   # scripts/provenance.py
+
+
+def summary(pairs, far: int) -> dict:
+    """Branches, the share whose parent lies more than `far` back (and more than 32, 64, 128), Connect of all, of the
+    near and of the far ones, and the far ones' share of the unconnected."""
+    import numpy as np
+    g = np.concatenate([p[0] for p in pairs]); a = np.concatenate([p[1] for p in pairs])
+    f = g > far
+    rate = lambda m: float(a[m].mean()) if m.any() else None
+    beyond = {k: float((g > k).mean()) for k in (32, 64, 128)}
+    return dict(branches=int(len(g)), far_share=float(f.mean()), beyond=beyond,
+                connect=rate(np.ones_like(f)), connect_near=rate(~f), connect_far=rate(f),
+                far_share_of_unconnected=float(f[~a].mean()) if (~a).any() else None)
+
+
+if __name__ == "__main__":
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--species", nargs="+", default=None, help="default: every species whose model ships")
+    p.add_argument("--n", type=int, default=48, help="free samples a species")
+    p.add_argument("--trees", type=int, default=200, help="procedural trees a species")
+    p.add_argument("--far", type=int, default=16, help="branches back beyond which a parent counts as far")
+    p.add_argument("--seed", type=int, default=0); p.add_argument("--threads", type=int, default=None)
+    p.add_argument("--out", default="results/reach.json")
+    a = p.parse_args()
+    import torch
+    from tqdm.auto import tqdm
+    from treebook.botany import species, grow_tree
+    from treebook.sampling import sample
+    from treebook.species_runs import parent_gaps
+    from treebook.train import load_pretrained, shipped_species, species_model
+    if a.threads: torch.set_num_threads(a.threads)
+    out = Path(a.out)
+    old = json.loads(out.read_text()) if out.is_file() else {}
+    rows = old.get("species", {}) if old.get("far") == a.far and old.get("seed") == a.seed else {}
+    for name in a.species or shipped_species():
+        net, tok = load_pretrained(species_model(name))
+        cap = min(species(name).max_branches, net.config.max_len // 8 - 2)
+        trees = [grow_tree(species(name), 10**6 + i, max_branches=cap) for i in tqdm(range(a.trees), desc=name)]
+        proc = summary([parent_gaps(tok.encode(t), tok) for t in trees], a.far)
+        t0 = time.time()
+        seqs = sample(net, a.n, tok=tok, structure=False, min_len=24, seed=a.seed, progress=True)
+        free = summary([parent_gaps(s, tok) for s in seqs], a.far) | {"samples": a.n, "seconds": time.time() - t0}
+        rows[name] = dict(window=net.config.window, max_branches=cap, procedural=proc | {"trees": a.trees}, free=free,
+                          command="python benchmarks/reach.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
+                          time=time.strftime("%Y-%m-%d %H:%M:%S"))
+        print(name, json.dumps(rows[name]), flush=True)
+    res = {"far": a.far, "seed": a.seed, "n": a.n, "trees": a.trees, "species": rows}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(res, indent=1))
