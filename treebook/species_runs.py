@@ -25,7 +25,7 @@ from .tree import TreebookError, _atomic_write
 from .botany import SPECIES, species as _species
 from .datasets import generate_dataset, load_manifest, load_trees
 from .hourglass import TreeTransformer
-from .tokens import Tokenizer
+from .tokens import Tokenizer, _as_tokens, _parse
 from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
@@ -292,7 +292,6 @@ def parent_gaps(tokens, tok) -> tuple:
     cell: how many branches back its parent lies (the latest earlier branch that ends in its start cell or, where
     none does, the earlier branch whose end cell is nearest), and whether Connect counts it (another ends there)."""
     from collections import Counter
-    from .tokens import _as_tokens, _parse
     V = _parse(_as_tokens(tokens, False), False)[0].astype(np.int64)
     S, E = V[:, :3], V[:, 4:7]
     key = lambda P: (P[:, 0] * 65536 + P[:, 1] * 256 + P[:, 2]).tolist()
