@@ -25,7 +25,7 @@ def summary(pairs, far: int) -> dict:
     rate = lambda m: float(a[m].mean()) if m.any() else None
     beyond = {k: float((g > k).mean()) for k in (32, 64, 128)}
     return dict(branches=int(len(g)), far_share=float(f.mean()), beyond=beyond,
-                connect=rate(np.ones_like(f)), connect_near=rate(~f), connect_far=rate(f),
+                connect=float(a.mean()), connect_near=rate(~f), connect_far=rate(f),
                 far_share_of_unconnected=float(f[~a].mean()) if (~a).any() else None)
 
 

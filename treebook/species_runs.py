@@ -25,7 +25,7 @@ from .tree import TreebookError, _atomic_write
 from .botany import SPECIES, species as _species
 from .datasets import generate_dataset, load_manifest, load_trees
 from .hourglass import TreeTransformer
-from .tokens import Tokenizer, _as_tokens, _parse
+from .tokens import Tokenizer, _anchored, _as_tokens, _cell_keys, _link, _parse
 from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
@@ -291,21 +291,19 @@ def parent_gaps(tokens, tok) -> tuple:
     """(gap, anchored) for each branch of the token sequence `tokens` after the first that does not start in the root
     cell: how many branches back its parent lies (the latest earlier branch that ends in its start cell or, where
     none does, the earlier branch whose end cell is nearest), and whether Connect counts it (another ends there)."""
-    from collections import Counter
     V = _parse(_as_tokens(tokens, False), False)[0].astype(np.int64)
-    S, E = V[:, :3], V[:, 4:7]
-    key = lambda P: (P[:, 0] * 65536 + P[:, 1] * 256 + P[:, 2]).tolist()
-    sk, ek = key(S), key(E)
-    n_end, last, gaps, anchored = Counter(ek), {}, [], []
-    for i in range(len(V)):
-        if i and sk[i] != tok.root_key:
-            j = last.get(sk[i])
-            if j is None:  # no earlier end here: the nearest earlier end (Chebyshev, in cells), the latest on ties
-                d = np.abs(E[:i] - S[i]).max(1)
-                j = i - 1 - int(np.argmin(d[::-1]))
-            gaps.append(i - j); anchored.append(n_end[sk[i]] - (ek[i] == sk[i]) > 0)
-        last[ek[i]] = i
-    return np.array(gaps, np.int64), np.array(anchored, bool)
+    sk, ek = _cell_keys(V)
+    parent, at_root = _link(V, tok.root_key)         # the latest earlier branch ending in the start cell, if any
+    anchored = _anchored(sk, ek, tok.root_key)
+    gaps, counted = [], []
+    for i in np.flatnonzero(~at_root).tolist():
+        if not i: continue
+        j = int(parent[i])
+        if not 0 <= j < i:  # no earlier end here: the nearest earlier end (Chebyshev, in cells), the latest on ties
+            d = np.abs(V[:i, 4:7] - V[i, :3]).max(1)
+            j = i - 1 - int(np.argmin(d[::-1]))
+        gaps.append(i - j); counted.append(anchored[i])
+    return np.array(gaps, np.int64), np.array(counted, bool)
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949
 def pace(log_csv) -> float | None:

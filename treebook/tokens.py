@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import heapq
+from collections import Counter
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -210,11 +211,14 @@ def _parse(a: np.ndarray, strict: bool):
     return rows[value], stage_no, bool(stage.any())
 
 # %% ../nbs/03_tokens.ipynb #265d5275
+def _cell_keys(V: np.ndarray) -> list:
+    "[start keys, end keys] of the branches `V` (n, 8): one integer per cell, as lists."
+    return [(V[:, a] * 65536 + V[:, a + 1] * 256 + V[:, a + 2]).tolist() for a in (0, 4)]
+
 def _link(V: np.ndarray, root_key: int):
     "Parent of each branch (-1: none) from matching start and end cells, by the tie rules above."
     n = len(V)
-    sk = (V[:, 0] * 65536 + V[:, 1] * 256 + V[:, 2]).tolist()
-    ek = (V[:, 4] * 65536 + V[:, 5] * 256 + V[:, 6]).tolist()
+    sk, ek = _cell_keys(V)
     parent = [-1] * n
     last = {}
     for i in range(n):                       # latest earlier branch ending in my start cell
@@ -262,14 +266,16 @@ class Connectivity:
     branches: int
 
 # %% ../nbs/03_tokens.ipynb #3880ed97
+def _anchored(sk: list, ek: list, root_key: int) -> list:
+    "Whether each branch (start keys `sk`, end keys `ek`) starts in the root cell or where another branch ends."
+    n_end = Counter(ek)
+    return [s == root_key or n_end[s] - (e == s) > 0 for s, e in zip(sk, ek)]
+
 def _connectivity(V: np.ndarray, root_key: int) -> Connectivity:
     n = len(V)
     if not n: return Connectivity(0.0, False, 0)
-    sk = (V[:, 0] * 65536 + V[:, 1] * 256 + V[:, 2]).tolist()
-    ek = (V[:, 4] * 65536 + V[:, 5] * 256 + V[:, 6]).tolist()
-    ends = {}
-    for i, k in enumerate(ek): ends.setdefault(k, []).append(i)
-    anchored = sum(1 for i, s in enumerate(sk) if s == root_key or any(j != i for j in ends.get(s, ())))
+    sk, ek = _cell_keys(V)
+    anchored = sum(_anchored(sk, ek, root_key))
     starts = {}
     for i, k in enumerate(sk): starts.setdefault(k, []).append(i)
     seen_cells, reached, todo = {root_key}, 0, [root_key]
