@@ -211,10 +211,11 @@ def test_one_prompt_per_row(models, arch):
 
 @pytest.mark.parametrize("arch", ["hg1", "hg2", "full"])
 @pytest.mark.parametrize("window", [1, 5, 8, 16])
-def test_window_is_causal_and_cached(arch, window):
-    "A window in the full-resolution layers: future tokens never move earlier logits, and the cache agrees."
+@pytest.mark.parametrize("ends", [False, True])
+def test_window_is_causal_and_cached(arch, window, ends):
+    "A window (with or without ends) in the full-resolution layers: the future moves nothing, the cache agrees."
     torch.manual_seed(window)
-    m = TreeTransformer(ModelConfig(arch=arch, window=window, **TINY)).eval()
+    m = TreeTransformer(ModelConfig(arch=arch, window=window, ends=ends, **TINY)).eval()
     assert check_causal(m, length=37) <= 1e-5
     for prompt in (0, 3, 20):
         assert check_cache(m, length=41, prompt=prompt) <= 1e-4
@@ -233,3 +234,17 @@ def test_window_sees_only_the_last_tokens():
     with torch.no_grad(): y, y2 = att(x), att(x2)
     torch.testing.assert_close(y[:, 13:], y2[:, 13:])       # positions 13.. see 10.. only
     assert (y[:, 10:13] - y2[:, 10:13]).abs().max() > 1e-4
+
+
+def test_ends_see_every_branch_end():
+    "With ends, position t sees, before its window, exactly the positions s with s % 8 == 7 (each branch's last token)."
+    from treebook.hourglass import Attention
+    torch.manual_seed(0)
+    att = Attention(ModelConfig(dim=16, heads=2, depth=8, window=4, ends=True), window=4).eval()
+    x = torch.randn(1, 40, 16)
+    with torch.no_grad():
+        for s, moves in ((7, True), (15, True), (6, False), (12, False)):
+            x2 = x.clone(); x2[:, s] = torch.randn(16)
+            d = (att(x) - att(x2)).abs().amax(-1)[0]
+            assert d[:s].max() < 1e-6                                   # causal
+            assert (d[s + 4:].max() > 1e-4) == moves, (s, d)             # beyond the window: only the ends count

@@ -63,3 +63,14 @@ def test_make_species_commands():
     assert "-m treebook.species_runs train hickory --run runs/hickory --threads 2 --time-limit 6000" in lines[1]
     assert "scripts/ship_elm.py --species hickory --run runs/hickory" in lines[2] and \
         '--recipe "make species SPECIES=hickory"' in lines[2]
+
+
+def test_recipe_flags_round_trip(tmp_path):
+    "The command `gpu_runs` writes for a run parses back to the same recipe, switches (--ends) included."
+    from treebook.species_runs import RECIPE, _train_cmd, parser
+    for recipe in ({"window": 128, "ends": True, "steps": 50}, {"window": 64}, {"ends": False, "lr": 1e-3}):
+        argv = _train_cmd("spruce", tmp_path / "r", tmp_path / "d", "cpu", 1, recipe)[3:]
+        a = parser().parse_args(argv)
+        got = {k: getattr(a, k) for k in RECIPE if getattr(a, k, None) is not None}
+        assert got == {k: v for k, v in recipe.items() if v is not False}, (argv, got)
+    assert parser().parse_args(["train", "elm"]).ends is None                    # unset: the recipe's False

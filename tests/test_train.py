@@ -99,3 +99,20 @@ def test_sample_from_checkpoint(data, tmp_path):
     assert all((x.end == y.end).all() for x, y in zip(a, b))
     with pytest.raises(TreebookError, match="no shipped model"): sample_trees(2, model="oak")
     with pytest.raises(TreebookError, match="top_p"): sample_trees(2, model=str(tmp_path / "s" / "best.pt"), top_p=0)
+
+
+def test_window_and_ends(data, tmp_path):
+    "A run with a window and ends resumes exactly, says so in its checkpoint, and may start from a model without them."
+    kw = {**TINY, "window": 8, "ends": True}
+    with pytest.raises(TreebookError, match="only with a window"): train(data, tmp_path / "o", **{**TINY, "ends": True})
+    full = train(data, tmp_path / "full", **kw)
+    part = train(data, tmp_path / "part", stop_after=3, **kw)
+    assert same(full["model"].state_dict(), train(data, tmp_path / "part", resume=True, **kw)["model"].state_dict())
+    with pytest.raises(TreebookError, match="other settings"): train(data, tmp_path / "part", resume=True, **TINY)
+    ck = torch.load(tmp_path / "full" / "last.pt", weights_only=True)
+    assert ck["args"]["ends"] is True and ck["config"]["ends"] is True
+    plain = train(data, tmp_path / "plain", **TINY)                 # no window: the same weights fit
+    more = train(data, tmp_path / "more", init=str(tmp_path / "plain" / "best.pt"), **kw)
+    assert more["model"].config.ends and more["step"] == 8
+    with pytest.raises(TreebookError, match="not the one this run trains"):
+        train(data, tmp_path / "wide", init=str(tmp_path / "plain" / "best.pt"), **{**kw, "dim": 64})

@@ -39,6 +39,7 @@ class ModelConfig:
     mlp_ratio: int = 4      # hidden width of the feed-forward layer, in multiples of `dim`
     dropout: float = 0.0
     window: int = 0         # the full-resolution layers attend to the last `window` tokens only (0: to all)
+    ends: bool = False      # with a window, they also see the last token of every earlier branch
     def __post_init__(self):
         if self.arch not in ARCHS: raise TreebookError(f"unknown arch {self.arch!r}: choose one of {', '.join(ARCHS)}")
         if self.dim <= 0 or self.heads <= 0 or self.dim % self.heads:
@@ -51,6 +52,8 @@ class ModelConfig:
         if self.max_len < 1 or self.vocab_size < 1: raise TreebookError("max_len and vocab_size must be positive")
         if type(self.window) is not int or self.window < 0 or (self.window and not self.factors):
             raise TreebookError(f"window must be a whole number >= 0, and 0 for arch 'pt'; got {self.window!r}")
+        if type(self.ends) is not bool or (self.ends and not self.window):
+            raise TreebookError(f"ends must be True or False, and True only with a window; got {self.ends!r}")
 
     @property
     def factors(self) -> tuple:
@@ -75,24 +78,31 @@ class KVCache:
         self.v = torch.zeros_like(self.k)
         self.n = 0
 
-    def append(self, k, v, window: int = 0):
+    def append(self, k, v, window: int = 0, ends: bool = False):
         """Store the new keys and values; return the keys and values the new queries may see and their mask (None: see
-        all): every cached position, or with a `window` the last `window` positions of each query."""
+        all): every cached position, or with a `window` the last `window` positions of each query (and with `ends`
+        the last position of every group of 8 before them)."""
         n0, t = self.n, k.shape[2]
         if n0 + t > self.k.shape[2]:
             raise TreebookError(f"the cache holds {self.k.shape[2]} positions; cannot add {t} to {n0}")
         self.k[:, :, n0:n0 + t], self.v[:, :, n0:n0 + t] = k, v
         self.n = n1 = n0 + t
         lo = max(0, n0 - window + 1) if window else 0           # the oldest position a new query sees
+        if ends and t == 1:                                     # the ends before the window, then the window
+            at = torch.cat([torch.arange(7, max(7, lo), 8, device=k.device), torch.arange(lo, n1, device=k.device)])
+            return self.k[:, :, at], self.v[:, :, at], None
+        if ends: lo = 0
         if t == 1: return self.k[:, :, lo:n1], self.v[:, :, lo:n1], None
         q, s = torch.arange(n0, n1, device=k.device)[:, None], torch.arange(lo, n1, device=k.device)
-        mask = (s <= q) & (s > q - window) if window else s <= q
+        seen = (s > q - window) | ((s % 8 == 7) if ends else False)
+        mask = (s <= q) & seen if window else s <= q
         return self.k[:, :, lo:n1], self.v[:, :, lo:n1], mask
 
 
 # %% ../nbs/04_hourglass.ipynb #45b70048
-def window_attention(q, k, v, window: int, dropout_p: float = 0.0):
-    "Causal attention of `q`, `k`, `v` (B, H, T, D) in which position t sees positions t-window+1 .. t only."
+def window_attention(q, k, v, window: int, dropout_p: float = 0.0, ends: bool = False):
+    """Causal attention of `q`, `k`, `v` (B, H, T, D) in which position t sees positions t-window+1 .. t only (and
+    with `ends` also every earlier position s with s % 8 == 7, the last token of each branch)."""
     B, H, T, D = q.shape
     W = window
     if T <= W: return F.scaled_dot_product_attention(q, k, v, is_causal=True, dropout_p=dropout_p)
@@ -102,16 +112,24 @@ def window_attention(q, k, v, window: int, dropout_p: float = 0.0):
     chunks = lambda x, a: x[:, :, a:a + (n - 1) * W].reshape(B, H, n - 1, W, D)   # the chunks from position a on
     k2, v2 = (torch.cat([chunks(x, 0), chunks(x, W)], 3) for x in (k, v))          # chunk c-1, then chunk c
     i, j = torch.arange(W, device=q.device)[:, None], torch.arange(2 * W, device=q.device)
-    rest = F.scaled_dot_product_attention(chunks(q, W), k2, v2, attn_mask=(j > i) & (j <= i + W), dropout_p=dropout_p)
+    mask = (j > i) & (j <= i + W)
+    if ends:                                                            # every chunk also gets the ends, masked
+        e = torch.arange(7, max(7, (n - 1) * W), 8, device=q.device)         # the ends before the last chunk's window
+        k2, v2 = (torch.cat([x[:, :, e, None].expand(B, H, len(e), n - 1, D).transpose(2, 3), y], 3)
+                  for x, y in ((k, k2), (v, v2)))
+        t = torch.arange(W, n * W, device=q.device).view(n - 1, W, 1)  # each chunk's query positions
+        mask = torch.cat([e <= t - W, mask.expand(n - 1, W, 2 * W)], 2)
+    rest = F.scaled_dot_product_attention(chunks(q, W), k2, v2, attn_mask=mask, dropout_p=dropout_p)
     return torch.cat([first, rest.reshape(B, H, (n - 1) * W, D)], 2)[:, :, :T]
 
 
 # %% ../nbs/04_hourglass.ipynb #74101b66
 class Attention(nn.Module):
-    "Causal multi-head self-attention; with `window`, each position sees the last `window` positions only."
+    """Causal multi-head self-attention; with `window`, each position sees the last `window` positions only (and,
+    with the config's `ends`, the last token of every earlier branch)."""
     def __init__(self, c: ModelConfig, window: int = 0):
         super().__init__()
-        self.heads, self.dropout, self.window = c.heads, c.dropout, window
+        self.heads, self.dropout, self.window, self.ends = c.heads, c.dropout, window, c.ends and window > 0
         self.qkv = nn.Linear(c.dim, 3 * c.dim, bias=False)
         self.proj = nn.Linear(c.dim, c.dim, bias=False)
 
@@ -120,10 +138,10 @@ class Attention(nn.Module):
         q, k, v = self.qkv(x).view(B, T, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)
         if cache is None:
             p = self.dropout if self.training else 0.0
-            y = (window_attention(q, k, v, self.window, p) if self.window else
+            y = (window_attention(q, k, v, self.window, p, self.ends) if self.window else
                  F.scaled_dot_product_attention(q, k, v, is_causal=True, dropout_p=p))
         else:
-            k, v, mask = cache.append(k, v, self.window)
+            k, v, mask = cache.append(k, v, self.window, self.ends)
             y = F.scaled_dot_product_attention(q, k, v, attn_mask=mask)
         return self.proj(y.transpose(1, 2).reshape(B, T, C))
 
@@ -308,7 +326,7 @@ def save(self: TreeTransformer, path, **meta) -> Path:
         json.dumps(meta)
     except TypeError as e:
         raise TreebookError(f"checkpoint metadata must be plain numbers, strings, lists and dicts: {e}") from None
-    config = {k: v for k, v in asdict(self.config).items() if not (k == "window" and v == 0)}  # older readers lack it
+    config = {k: v for k, v in asdict(self.config).items() if not (k in ("window", "ends") and not v)}  # older readers
     ckpt = {"format": "treebook.hourglass", "version": CHECKPOINT_VERSION, "config": config,
             "state_dict": {k: v.detach().cpu() for k, v in self.state_dict().items()}, "meta": meta}
     return _atomic_write(Path(path), lambda f: torch.save(ckpt, f))

@@ -36,7 +36,7 @@ __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_t
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
 RECIPE = dict(order="dfs", arch="full", dim=128, depth=8, heads=4, batch_size=16, steps=4000, lr=2e-3, warmup=100,
-              val_every=500, val_trees=128, ckpt_every=50, seed=0, window=0)   # train()'s arguments, as `make elm`'s
+              val_every=500, val_trees=128, ckpt_every=50, seed=0, window=0, ends=False)  # train()'s, as `make elm`'s
 
 # %% ../nbs/05a_species_runs.ipynb #28abec87
 def species_data(name: str, folder=None, n: int = TREES, workers: int = 2, max_branches: int | None = None,
@@ -90,6 +90,7 @@ def _card_head(res: dict, max_len: int) -> str:
     how = f"`{run['trained_by']}` (training), then `{cmd}`" if run.get("trained_by") else f"`{cmd}` (resumable)"
     where = run.get("device") or "2 shared CPU cores"
     window = f", window {ar['window']} in the full-resolution layers" if ar.get("window") else ""
+    window += " (which also see every earlier branch's last token)" if ar.get("ends") else ""
     start = f"; started from the weights of `{ar['init']}`" if ar.get("init") else ""
     return f"""# {name}: a {ar['order'].upper()} / {ar['arch'].capitalize()} hourglass transformer for procedural \
 {PLURAL[name]}
@@ -346,7 +347,8 @@ def unpack_run(tar, run) -> Path:
 # %% ../nbs/05a_species_runs.ipynb #c290da9c
 def _train_cmd(name: str, run, data, device: str, threads: int, recipe: dict, **flags) -> list:
     "The command line that trains species `name` in `run`: `python -m treebook.species_runs train ...`."
-    opts = [a for k, v in (recipe | flags).items() if v is not None for a in (f"--{k.replace('_', '-')}", str(v))]
+    opts = [a for k, v in (recipe | flags).items() if v is not None and v is not False
+            for a in (f"--{k.replace('_', '-')}",) + (() if v is True else (str(v),))]
     return [sys.executable, "-m", "treebook.species_runs", "train", name, "--run", str(run), "--data", str(data),
             "--device", device, "--threads", str(threads), "--quiet", *opts]
 
@@ -404,9 +406,10 @@ def gpu_runs(seconds: float, outdir, names, trees: int = TREES, device: str = "c
 
 # %% ../nbs/05a_species_runs.ipynb #b71f7832
 def _recipe_flags(p):
-    "A flag for each number of `RECIPE` (--dim, --batch-size, ...); unset, the recipe's value holds."
+    "A flag for each number or switch of `RECIPE` (--dim, --batch-size, --ends, ...); unset, the recipe's value holds."
     for k, v in RECIPE.items():
-        if isinstance(v, (int, float)):
+        if isinstance(v, bool): p.add_argument(f"--{k}", action="store_true", default=None, help=f"(recipe: {v})")
+        elif isinstance(v, (int, float)):
             p.add_argument(f"--{k.replace('_', '-')}", type=type(v), default=None, help=f"(recipe: {v})")
 
 # %% ../nbs/05a_species_runs.ipynb #6618a446

@@ -13,7 +13,7 @@ import os
 import platform
 import sys
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -124,6 +124,8 @@ def _check_train_args(order, arch, **kw):
     device = kw.get("device", "cpu")
     if device != "cpu" and not torch.cuda.is_available():
         raise TreebookError(f"device {device!r}: PyTorch sees no GPU here; train with device='cpu'")
+    if kw.get("ends") not in (None, False, True) or (kw.get("ends") and not kw.get("window")):
+        raise TreebookError(f"ends must be True or False, and True only with a window; got {kw.get('ends')!r}")
     for name, need in _WHOLE.items():
         v = kw[name]
         if v is not None and (not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < need):
@@ -168,7 +170,7 @@ def _run_tokenizer(out_dir, train_set, args: dict, resume: bool, rank: int, star
     `start` the run starts from), or read back on `resume`."""
     if resume:
         ckpt = _load_state(out_dir / "last.pt")
-        stored = {k: v for k, v in {"window": 0, "init": None, **ckpt["args"]}.items()   # runs before window, init
+        stored = {k: v for k, v in {"window": 0, "ends": False, "init": None, **ckpt["args"]}.items()  # older runs
                   if k not in ("steps",)}
         mine = {k: v for k, v in args.items() if k not in ("steps",)}
         if stored != mine:
@@ -290,7 +292,7 @@ def _loop(run: _Run, net, sampler, batch_seqs, total: int, every: tuple, stop, b
 def _start_from(init, config) -> tuple:
     "(model, tokenizer) of `init` (a shipped model's name or a checkpoint) for a run whose model is `config`."
     model, tok = load_pretrained(str(init))
-    if model.config != config:
+    if replace(model.config, window=0, ends=False) != replace(config, window=0, ends=False):  # these change no weight
         theirs, mine = asdict(model.config), asdict(config)
         diff = {k: (theirs[k], mine[k]) for k in mine if theirs[k] != mine[k]}
         raise TreebookError(f"init {init}: its model is not the one this run trains (init, run): {diff}")
@@ -304,7 +306,7 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
           val_trees: int = 256, ckpt_every: int = 50, log_every: int = 10, max_train: int | None = None,
           stop_after: int | None = None, time_limit: float | None = None, threads: int | None = None,
           resume: bool = False, seed: int = 0, progress: bool = True, rank_weights: bool = False, window: int = 0,
-          device: str = "cpu", init=None) -> dict:
+          ends: bool = False, device: str = "cpu", init=None) -> dict:
     """Train a `TreeTransformer` on the dataset in `data_dir`; files go to `out_dir` (see above).
     `steps` (default: `epochs` of the training split) sets the schedule's length; `stop_after` ends this call after
     that many steps in all (a planned interruption: resume later), `time_limit` after that many seconds of this call;
@@ -319,9 +321,9 @@ def train(data_dir, out_dir, order: str = "dfs", arch: str = "full", dim: int = 
     args = dict(data_dir=str(data_dir), order=order, arch=arch, dim=dim, depth=depth, heads=heads,
                 batch_size=batch_size, world=world, epochs=epochs, steps=steps, lr=lr, warmup=warmup,
                 weight_decay=weight_decay, grad_clip=grad_clip, augment=augment_data, val_trees=len(val_set),
-                max_train=max_train, seed=seed, window=window, init=None if init is None else str(init))
+                max_train=max_train, seed=seed, window=window, ends=ends, init=None if init is None else str(init))
     config = ModelConfig(arch=arch, dim=dim, depth=depth, heads=heads,
-                         max_len=max(t.n for t in train_set + val_set) * 8 + 16, window=window)
+                         max_len=max(t.n for t in train_set + val_set) * 8 + 16, window=window, ends=ends)
     start = _start_from(init, config) if init is not None and not resume else (None, None)
     tok, ckpt = _run_tokenizer(out_dir, train_set, args, resume, rank, start[1])
     model, opt = _model_opt(config, seed, lr, weight_decay, ckpt, device)
@@ -470,6 +472,7 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
         p.add_argument(f"--{name}", type=typ, default=default)
     p.add_argument("--no-augment", action="store_true"); p.add_argument("--resume", action="store_true")
     p.add_argument("--quiet", action="store_true"); p.add_argument("--rank-weights", action="store_true")
+    p.add_argument("--ends", action="store_true", help="with --window: also see every earlier branch's last token")
     p.add_argument("--device", default="cpu", help="cpu (default) or cuda")
     p.add_argument("--init", default=None, help="start from this model's weights and tokenizer (a shipped name or .pt)")
     a = p.parse_args(argv)
@@ -480,7 +483,7 @@ def main(argv=None, parser_class=argparse.ArgumentParser) -> dict:
               val_every=a.val_every, val_trees=a.val_trees, ckpt_every=a.ckpt_every, max_train=a.max_train,
               stop_after=a.stop_after, time_limit=a.time_limit, threads=a.threads, resume=a.resume, seed=a.seed,
               progress=not a.quiet,
-              rank_weights=a.rank_weights, window=a.window, device=a.device, init=a.init)
+              rank_weights=a.rank_weights, window=a.window, ends=a.ends, device=a.device, init=a.init)
     r.pop("model")
     if int(os.environ.get("RANK", "0")) == 0: print(json.dumps(r))
     return r
