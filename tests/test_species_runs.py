@@ -68,9 +68,12 @@ def test_make_species_commands():
 def test_recipe_flags_round_trip(tmp_path):
     "The command `gpu_runs` writes for a run parses back to the same recipe, switches (--ends) included."
     from treebook.species_runs import RECIPE, _train_cmd, parser
-    for recipe in ({"window": 128, "ends": True, "steps": 50}, {"window": 64}, {"ends": False, "lr": 1e-3}):
+    for recipe in ({"window": 128, "ends": True, "steps": 50}, {"window": 64}, {"ends": False, "lr": 1e-3},
+                   {"order": "bfs", "arch": "hg2r"}, {"order": "hilbert", "steps": 20}):
         argv = _train_cmd("spruce", tmp_path / "r", tmp_path / "d", "cpu", 1, recipe)[3:]
         a = parser().parse_args(argv)
         got = {k: getattr(a, k) for k in RECIPE if getattr(a, k, None) is not None}
         assert got == {k: v for k, v in recipe.items() if v is not False}, (argv, got)
     assert parser().parse_args(["train", "elm"]).ends is None                    # unset: the recipe's False
+    assert parser().parse_args(["train", "elm"]).order is None                   # unset: the recipe's dfs
+    with pytest.raises(SystemExit): parser().parse_args(["train", "elm", "--order", "random"])   # not an order

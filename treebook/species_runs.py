@@ -24,8 +24,8 @@ import torch
 from .tree import TreebookError, _atomic_write
 from .botany import SPECIES, species as _species
 from .datasets import generate_dataset, load_manifest, load_trees
-from .hourglass import TreeTransformer
-from .tokens import Tokenizer, _anchored, _as_tokens, _cell_keys, _link, _parse
+from .hourglass import ARCHS, TreeTransformer
+from .tokens import ORDERS, Tokenizer, _anchored, _as_tokens, _cell_keys, _link, _parse
 from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
@@ -406,9 +406,12 @@ def gpu_runs(seconds: float, outdir, names, trees: int = TREES, device: str = "c
 
 # %% ../nbs/05a_species_runs.ipynb #b71f7832
 def _recipe_flags(p):
-    "A flag for each number or switch of `RECIPE` (--dim, --batch-size, --ends, ...); unset, the recipe's value holds."
+    """A flag for each number, switch or choice of `RECIPE` (--dim, --ends, --order, ...); unset, the recipe's value
+    holds. --order and --arch train the variants of chapter 07's tables by the same recipe."""
     for k, v in RECIPE.items():
         if isinstance(v, bool): p.add_argument(f"--{k}", action="store_true", default=None, help=f"(recipe: {v})")
+        elif isinstance(v, str):
+            p.add_argument(f"--{k}", choices=dict(order=ORDERS, arch=ARCHS)[k], default=None, help=f"(recipe: {v})")
         elif isinstance(v, (int, float)):
             p.add_argument(f"--{k.replace('_', '-')}", type=type(v), default=None, help=f"(recipe: {v})")
 
