@@ -14,7 +14,7 @@ def one_run(a, order, arch, lr, out):
     from treebook.sampling import sample; from treebook.metrics import tree_clouds, sample_scores
     t0 = time.time()
     r = train(a.data, out, order=order, arch=arch, dim=a.dim, depth=a.depth, heads=a.heads, batch_size=a.batch_size, steps=a.steps, lr=lr,
-              warmup=a.steps // 10, val_trees=a.val_trees, ckpt_every=a.steps, progress=False, resume=(out / "last.pt").exists(), seed=a.seed)
+              warmup=a.steps // 10, val_trees=a.val_trees, ckpt_every=min(a.steps, 100), progress=False, resume=(out / "last.pt").exists(), seed=a.seed)
     peak_mb, (model, tok) = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, load_pretrained(out / "best.pt")
     test, trn = load_trees(a.data, "test"), load_trees(a.data, "train")
     cache = Path(a.runs) / "reference_clouds.npz"  # held-out and (500) training clouds, made once for all runs
