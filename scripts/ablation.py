@@ -51,7 +51,7 @@ if __name__ == "__main__":
     tabs = {"orders": [results[(o, ar, a.lr)] for o, ar in ORDER_RUNS if (o, ar, a.lr) in results], "archs": [results[(o, ar, a.lr)] for o, ar in ARCH_RUNS if (o, ar, a.lr) in results],
             "lr": [results[k] for k in results if k[:2] == ("dfs", "full")]}
     for name, rows in tabs.items():
-        if len(rows) > (name == "lr"): (provenance.ROOT / "results" / f"ablation_{name}.json").write_text(json.dumps({**meta, "rows": rows}, indent=1))
+        if len(rows) == {"orders": len(ORDER_RUNS), "archs": len(ARCH_RUNS), "lr": 3}[name]: (provenance.ROOT / "results" / f"ablation_{name}.json").write_text(json.dumps({**meta, "rows": rows}, indent=1))
     if tabs["orders"]:
         from treebook.tree import Tree
         from treebook.render import render, image_grid
