@@ -28,29 +28,36 @@ def one_run(a, order, arch, lr, out):
            "seconds_per_epoch": r["seconds"] / r["step"] * (len(trn) // a.batch_size), "peak_rss_mb": peak_mb,
            "PPL": perplexity(model, tok.encode_batch(test, order), batch_size=16)["ppl"], "Connect": sc["Connect_free"]["Connect"],
            "Connect_structure": sc["Connect_structure"]["Connect"], "FPD": s["FPD"],
-           **{k: s[k] for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "Novel")}, "samples": len(sc["trees"]), "train_trees": len(trn), "wall_seconds": time.time() - t0}
+           **{k: s[k] for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "Novel")}, "samples": len(sc["trees"]), "wall_seconds": time.time() - t0}
     for i, g in enumerate(sc["trees"][:4]): g.save(out / f"sample_{i}.npz")
     (out / "result.json").write_text(json.dumps(res, indent=1)); print(json.dumps(res))
 
-def meta(a, note="2 CPU cores shared with other jobs (other training runs at the same time): times are comparable within a table only roughly"):
+def meta(a):
     "Provenance of a table: the command, commit, time, machine and setup."
+    note = "2 CPU cores shared with other jobs (other training runs at the same time): times are comparable within a table only roughly"
     return {"command": "python scripts/ablation.py " + " ".join(sys.argv[1:]), "commit": provenance.commit(), "time": time.strftime("%Y-%m-%d %H:%M:%S"),
             "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), "threads_per_run": a.threads, "note": note},
             "setup": {k: v for k, v in vars(a).items() if k not in ("_one", "only")}}
 
+def run(a, order, arch, lr, data=None, runs=None) -> dict:
+    "One row, trained on `data` and scored against a's held-out trees in its own process, unless its result.json exists."
+    data, runs = data or a.data, runs or a.runs
+    if not (out := Path(runs) / f"{order}-{arch}-{lr}" / "result.json").exists():
+        args = [f"--{k.replace('_', '-')}={v}" for k, v in vars(a).items() if k not in ("only", "lr_sweep", "_one", "sizes", "test_data") and v is not None]
+        print(f"== {data}: {order} / {arch} / lr {lr}", flush=True)
+        subprocess.run([sys.executable, __file__, *args, f"--data={data}", f"--runs={runs}", f"--test-data={a.test_data or a.data}", "--_one", order, arch, str(lr)], check=True)
+    return json.loads(out.read_text())
+
 def sizes_table(a):
     "Table 3: DFS / Full trained on a.data and on supersets of it of a.sizes trees, scored against a.data's held-out trees."
     from treebook.datasets import generate_dataset, load_manifest
-    passthrough, rows = [f"--{k.replace('_', '-')}={v}" for k, v in vars(a).items() if k not in ("only", "lr_sweep", "_one", "sizes") and v is not None], []
-    base = load_manifest(a.data)["config"]
+    rows, base = [], load_manifest(a.data)["config"]
     for n in [None] + [int(x) for x in a.sizes.split(",")]:
         data, runs = (a.data, a.runs) if n is None else (f"{a.data}_{n}", f"{a.runs}/trees{n}")
         if n is not None:  # resumable; a finished set is only checked
             generate_dataset(base["species"], n, data, max_branches=base["max_branches"], workers=2, seed=base["seed"])
-        if not (out := Path(runs) / f"dfs-full-{a.lr}" / "result.json").exists():
-            print(f"== {data}", flush=True)
-            subprocess.run([sys.executable, __file__, *passthrough, f"--data={data}", f"--runs={runs}", f"--test-data={a.data}", "--_one", "dfs", "full", str(a.lr)], check=True)
-        c = load_manifest(data)["counts"]; rows.append({**json.loads(out.read_text()), "data": data, "trees": c["trees"], "train_trees": c["train"]})
+        c = load_manifest(data)["counts"]
+        rows.append({**run(a, "dfs", "full", a.lr, data, runs), "data": data, "trees": c["trees"], "train_trees": c["train"]})
     (provenance.ROOT / "results" / "ablation_data.json").write_text(json.dumps({**meta(a), "rows": rows}, indent=1))
     print(json.dumps(rows, indent=1))
 
@@ -64,17 +71,13 @@ if __name__ == "__main__":
     if a.sizes: sizes_table(a); sys.exit()
     jobs = [(o, ar, a.lr) for o, ar in ORDER_RUNS + [r for r in ARCH_RUNS if r not in ORDER_RUNS]] + ([("dfs", "full", lr) for lr in (1e-3, 5e-3)] if a.lr_sweep else [])
     jobs = [j for j in jobs if not a.only or f"{j[0]}-{j[1]}" in a.only.split(",")]
-    passthrough, results = [f"--{k.replace('_', '-')}={v}" for k, v in vars(a).items() if k not in ("only", "lr_sweep", "_one") and v is not None], {}
-    for order, arch, lr in jobs:
-        if not (out := Path(a.runs) / f"{order}-{arch}-{lr}" / "result.json").exists():
-            print(f"== {order} / {arch} / lr {lr}", flush=True); subprocess.run([sys.executable, __file__, *passthrough, "--_one", order, arch, str(lr)], check=True)
-        results[(order, arch, lr)] = json.loads(out.read_text())
+    results = {(order, arch, lr): run(a, order, arch, lr) for order, arch, lr in jobs}
     info = meta(a)
     tabs = {"orders": [results[(o, ar, a.lr)] for o, ar in ORDER_RUNS if (o, ar, a.lr) in results], "archs": [results[(o, ar, a.lr)] for o, ar in ARCH_RUNS if (o, ar, a.lr) in results],
             "lr": [results[k] for k in results if k[:2] == ("dfs", "full")]}
     for name, rows in tabs.items():
         if len(rows) == {"orders": len(ORDER_RUNS), "archs": len(ARCH_RUNS), "lr": 3}[name]: (provenance.ROOT / "results" / f"ablation_{name}.json").write_text(json.dumps({**info, "rows": rows}, indent=1))
-    if tabs["orders"]:
+    if len(tabs["orders"]) == len(ORDER_RUNS):  # the picture, like the tables, only from a whole table
         from treebook.tree import Tree
         from treebook.render import render, image_grid
         got = [(f, f"{o} #{i}") for o, _ in ORDER_RUNS for i in range(4) if (f := Path(a.runs) / f"{o}-full-{a.lr}" / f"sample_{i}.npz").exists()]
