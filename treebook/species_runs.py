@@ -92,6 +92,8 @@ def _card_head(res: dict, max_len: int) -> str:
     window = f", window {ar['window']} in the full-resolution layers" if ar.get("window") else ""
     window += " (which also see every earlier branch's last token)" if ar.get("ends") else ""
     start = f"; started from the weights of `{ar['init']}`" if ar.get("init") else ""
+    if p := run.get("init_from"):   # the species' own model as shipped before this run
+        start += f" as shipped before ({p['steps']:,} steps in {p['minutes']:.0f} minutes, by `{p['recipe']}`)"
     return f"""# {name}: a {ar['order'].upper()} / {ar['arch'].capitalize()} hourglass transformer for procedural \
 {PLURAL[name]}
 
@@ -247,6 +249,19 @@ def ship_parser() -> argparse.ArgumentParser:
                    "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
     return p
 
+# %% ../nbs/05a_species_runs.ipynb #a516ed63
+def _shipped_before(init, name: str, results=None) -> dict | None:
+    """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`):
+    {'recipe', 'steps', 'minutes', 'commit'} from the record `results`/NAME_eval.json that shipped it; else None."""
+    p = Path(results or "results") / f"{name}_eval.json"
+    if init != name or not p.is_file(): return None
+    old = json.loads(p.read_text())
+    prev = old["run"].get("init_from")   # a model trained in several runs: the minutes and steps of all of them
+    return {"recipe": old.get("recipe", f"make species SPECIES={name}"), "commit": old.get("commit"),
+            "steps": old["run"]["last_step"] + (prev["steps"] if prev else 0),
+            "minutes": (old["run"]["train_seconds"] or 0) / 60 + (prev["minutes"] if prev else 0)}
+
+
 # %% ../nbs/05a_species_runs.ipynb #c1f6290a
 def ship_main(argv=None, record=None, weights=WEIGHTS, results=None) -> dict:
     """`scripts/ship_elm.py`: evaluate the run, write its record (`record(res, path, **machine)`: the script's
@@ -261,6 +276,7 @@ def ship_main(argv=None, record=None, weights=WEIGHTS, results=None) -> dict:
     res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
                        a.limit, a.ckpt, n_test=a.n_test)
     res["recipe"] = a.recipe or ("make elm" if name == "elm" else f"make species SPECIES={name}")
+    if p := _shipped_before(res["run"]["args"].get("init"), name, results): res["run"]["init_from"] = p
     res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
                                                       threads=a.threads, torch=torch.__version__)
     print(json.dumps(res, indent=1))
