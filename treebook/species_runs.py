@@ -207,10 +207,10 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
     return res
 
 # %% ../nbs/05a_species_runs.ipynb #ecba065c
-def ship_run(run, res: dict, card: str, weights=WEIGHTS, results=None, ckpt: str = "best.pt") -> list:
-    """Copy the run's weights and tokenizer into `weights` as NAME.pt and NAME.tok.json beside the card NAME.md, and
-    its loss curve to `results`/NAME_loss.png (if `results`); NAME is the record's species. Returns the paths."""
-    name, run, weights = res.get("species", "elm"), Path(run), Path(weights)
+def ship_run(run, res: dict, card: str, weights=None, results=None, ckpt: str = "best.pt") -> list:
+    """Copy the run's weights and tokenizer into `weights` (default the package's `WEIGHTS`) as NAME.pt and
+    NAME.tok.json beside the card NAME.md, and its loss curve to `results`/NAME_loss.png (if `results`); NAME is the record's species. Returns the paths."""
+    name, run, weights = res.get("species", "elm"), Path(run), Path(weights or WEIGHTS)
     out = [weights / f"{name}.pt", weights / f"{name}.tok.json", weights / f"{name}.md"]
     shutil.copyfile(run / ckpt, out[0]); shutil.copyfile(run / "tokenizer.json", out[1]); out[2].write_text(card)
     if results is not None and (run / "loss.png").is_file():
@@ -218,11 +218,11 @@ def ship_run(run, res: dict, card: str, weights=WEIGHTS, results=None, ckpt: str
     return out
 
 # %% ../nbs/05a_species_runs.ipynb #a22e02ef
-def recard(name: str, record, weights=WEIGHTS, batch: int = 50, n_connect: int = 100) -> dict:
+def recard(name: str, record, weights=None, batch: int = 50, n_connect: int = 100) -> dict:
     """The card of the shipped model `name` anew from its evaluation record (a path), whose targets `quality_targets`
     computes again and writes back: for when the figures a model is held to change. Returns the record."""
     from treebook.metrics import quality_targets
-    record, weights = Path(record), Path(weights)
+    record, weights = Path(record), Path(weights or WEIGHTS)
     if not record.is_file(): raise TreebookError(f"no evaluation record {record}: evaluate the run first")
     if not (weights / f"{name}.pt").is_file(): raise TreebookError(f"no model {weights / name}.pt ships")
     res = json.loads(record.read_text())
@@ -263,7 +263,7 @@ def _shipped_before(init, name: str, results=None) -> dict | None:
 
 
 # %% ../nbs/05a_species_runs.ipynb #c1f6290a
-def ship_main(argv=None, record=None, weights=WEIGHTS, results=None) -> dict:
+def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
     """`scripts/ship_elm.py`: evaluate the run, write its record (`record(res, path, **machine)`: the script's
     provenance), and unless --no-ship, `ship_run` with its `species_card`. Returns the record."""
     a = ship_parser().parse_args(argv)
