@@ -9,6 +9,8 @@ that this call does not run.
 
     .venv/bin/python benchmarks/reach.py                                  # 48 samples a species, some minutes
     .venv/bin/python benchmarks/reach.py --species elm --n 4 --trees 4 --out tmp/reach.json   # a check
+    .venv/bin/python benchmarks/reach.py --species hickory --model runs/hickory/best.pt --key hickory-2300
+                                                    # a model that does not ship, as its own row
 """
 import argparse, json, os, sys, time
 from pathlib import Path
@@ -36,8 +38,11 @@ if __name__ == "__main__":
     p.add_argument("--trees", type=int, default=200, help="procedural trees a species")
     p.add_argument("--far", type=int, default=16, help="branches back beyond which a parent counts as far")
     p.add_argument("--seed", type=int, default=0); p.add_argument("--threads", type=int, default=None)
+    p.add_argument("--model", default=None, help="a checkpoint (.pt) instead of the species' shipped model")
+    p.add_argument("--key", default=None, help="the row's name (default the species'); with --model, one species")
     p.add_argument("--out", default="results/reach.json")
     a = p.parse_args()
+    if (a.model or a.key) and len(a.species or []) != 1: p.error("--model and --key go with one --species")
     import torch
     from tqdm.auto import tqdm
     from treebook.botany import species, grow_tree
@@ -49,17 +54,18 @@ if __name__ == "__main__":
     old = json.loads(out.read_text()) if out.is_file() else {}
     rows = old.get("species", {}) if old.get("far") == a.far and old.get("seed") == a.seed else {}
     for name in a.species or shipped_species():
-        net, tok = load_pretrained(species_model(name))
+        net, tok = load_pretrained(a.model or species_model(name))
         cap = min(species(name).max_branches, net.config.max_len // 8 - 2)
         trees = [grow_tree(species(name), 10**6 + i, max_branches=cap) for i in tqdm(range(a.trees), desc=name)]
         proc = summary([parent_gaps(tok.encode(t), tok) for t in trees], a.far)
         t0 = time.time()
         seqs = sample(net, a.n, tok=tok, structure=False, min_len=24, seed=a.seed, progress=True)
         free = summary([parent_gaps(s, tok) for s in seqs], a.far) | {"samples": a.n, "seconds": time.time() - t0}
-        rows[name] = dict(window=net.config.window, max_branches=cap, procedural=proc | {"trees": a.trees}, free=free,
-                          command="python benchmarks/reach.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
-                          time=time.strftime("%Y-%m-%d %H:%M:%S"))
-        print(name, json.dumps(rows[name]), flush=True)
+        key = a.key or name
+        rows[key] = dict(window=net.config.window, max_branches=cap, procedural=proc | {"trees": a.trees}, free=free,
+                         command="python benchmarks/reach.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
+                         time=time.strftime("%Y-%m-%d %H:%M:%S"), model=a.model or species_model(name))
+        print(key, json.dumps(rows[key]), flush=True)
     res = {"far": a.far, "seed": a.seed, "n": a.n, "trees": a.trees, "species": rows}
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(res, indent=1))
