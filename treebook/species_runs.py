@@ -298,7 +298,10 @@ def models_table(results="results") -> str:
         r = json.loads(p.read_text())
         s, ref, cf, run = r["scores"], r["reference_train_vs_test"], r["Connect_free"], r["run"]
         met = quality_targets(r)  # today's figures, not those stored when the record was written
-        rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {run['last_step']:,} | "
+        p0 = run.get("init_from")   # a run that went on from the species' shipped model: its steps and the earlier
+        steps = f"{p0['steps'] + run['last_step']:,} ({p0['steps']:,} + {run['last_step']:,})" if p0 else \
+            f"{run['last_step']:,}"
+        rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {steps} | "
                     f"{r['data']['test']} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
                     f"{cf['Connect']:.3f} | {cf['Connected']:.2f} | {sum(met.values())} of {len(met)} |")
     return "\n".join(rows)
