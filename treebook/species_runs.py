@@ -209,7 +209,8 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
 # %% ../nbs/05a_species_runs.ipynb #ecba065c
 def ship_run(run, res: dict, card: str, weights=None, results=None, ckpt: str = "best.pt") -> list:
     """Copy the run's weights and tokenizer into `weights` (default the package's `WEIGHTS`) as NAME.pt and
-    NAME.tok.json beside the card NAME.md, and its loss curve to `results`/NAME_loss.png (if `results`); NAME is the record's species. Returns the paths."""
+    NAME.tok.json beside the card NAME.md, and its loss curve to `results`/NAME_loss.png (if `results`); NAME is the
+    record's species. Returns the paths."""
     name, run, weights = res.get("species", "elm"), Path(run), Path(weights or WEIGHTS)
     out = [weights / f"{name}.pt", weights / f"{name}.tok.json", weights / f"{name}.md"]
     shutil.copyfile(run / ckpt, out[0]); shutil.copyfile(run / "tokenizer.json", out[1]); out[2].write_text(card)
@@ -250,12 +251,15 @@ def ship_parser() -> argparse.ArgumentParser:
     return p
 
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
-def _shipped_before(init, name: str, results=None) -> dict | None:
+def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
     """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`):
-    {'recipe', 'steps', 'minutes', 'commit'} from the record `results`/NAME_eval.json that shipped it; else None."""
+    {'recipe', 'steps', 'minutes', 'commit'} from the record `results`/NAME_eval.json that shipped it; else None.
+    If that record is of this very run (`run`, its record's part: evaluated again), its own answer stands."""
     p = Path(results or "results") / f"{name}_eval.json"
     if init != name or not p.is_file(): return None
     old = json.loads(p.read_text())
+    same = lambda r: (r.get("args"), r.get("last_step"), r.get("train_seconds"))
+    if run is not None and same(old["run"]) == same(run): return old["run"].get("init_from")
     prev = old["run"].get("init_from")   # a model trained in several runs: the minutes and steps of all of them
     return {"recipe": old.get("recipe", f"make species SPECIES={name}"), "commit": old.get("commit"),
             "steps": old["run"]["last_step"] + (prev["steps"] if prev else 0),
@@ -276,7 +280,7 @@ def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
     res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
                        a.limit, a.ckpt, n_test=a.n_test)
     res["recipe"] = a.recipe or ("make elm" if name == "elm" else f"make species SPECIES={name}")
-    if p := _shipped_before(res["run"]["args"].get("init"), name, results): res["run"]["init_from"] = p
+    if p := _shipped_before(res["run"]["args"].get("init"), name, results, res["run"]): res["run"]["init_from"] = p
     res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
                                                       threads=a.threads, torch=torch.__version__)
     print(json.dumps(res, indent=1))
