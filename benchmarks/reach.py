@@ -54,7 +54,8 @@ if __name__ == "__main__":
     old = json.loads(out.read_text()) if out.is_file() else {}
     rows = old.get("species", {}) if old.get("far") == a.far and old.get("seed") == a.seed else {}
     for name in a.species or shipped_species():
-        net, tok = load_pretrained(a.model or species_model(name))
+        model = a.model or species_model(name)
+        net, tok = load_pretrained(model)
         cap = min(species(name).max_branches, net.config.max_len // 8 - 2)
         trees = [grow_tree(species(name), 10**6 + i, max_branches=cap) for i in tqdm(range(a.trees), desc=name)]
         proc = summary([parent_gaps(tok.encode(t), tok) for t in trees], a.far)
@@ -64,7 +65,7 @@ if __name__ == "__main__":
         key = a.key or name
         rows[key] = dict(window=net.config.window, max_branches=cap, procedural=proc | {"trees": a.trees}, free=free,
                          command="python benchmarks/reach.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
-                         time=time.strftime("%Y-%m-%d %H:%M:%S"), model=a.model or species_model(name))
+                         time=time.strftime("%Y-%m-%d %H:%M:%S"), model=model)
         print(key, json.dumps(rows[key]), flush=True)
     res = {"far": a.far, "seed": a.seed, "n": a.n, "trees": a.trees, "species": rows}
     out.parent.mkdir(parents=True, exist_ok=True)
