@@ -250,6 +250,11 @@ def ship_parser() -> argparse.ArgumentParser:
                    "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
     return p
 
+# %% ../nbs/05a_species_runs.ipynb #d6b7c185
+def _default_recipe(name: str) -> str:
+    "The command that makes species `name`'s model, where its record names none: `make elm` for the elm."
+    return "make elm" if name == "elm" else f"make species SPECIES={name}"
+
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
 def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
     """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`):
@@ -261,7 +266,7 @@ def _shipped_before(init, name: str, results=None, run: dict | None = None) -> d
     same = lambda r: (r.get("args"), r.get("last_step"), r.get("train_seconds"))
     if run is not None and same(old["run"]) == same(run): return old["run"].get("init_from")
     prev = old["run"].get("init_from")   # a model trained in several runs: the minutes and steps of all of them
-    return {"recipe": old.get("recipe", f"make species SPECIES={name}"), "commit": old.get("commit"),
+    return {"recipe": old.get("recipe", _default_recipe(name)), "commit": old.get("commit"),
             "steps": old["run"]["last_step"] + (prev["steps"] if prev else 0),
             "minutes": (old["run"]["train_seconds"] or 0) / 60 + (prev["minutes"] if prev else 0)}
 
@@ -279,7 +284,7 @@ def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
     torch.set_num_threads(a.threads)
     res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
                        a.limit, a.ckpt, n_test=a.n_test)
-    res["recipe"] = a.recipe or ("make elm" if name == "elm" else f"make species SPECIES={name}")
+    res["recipe"] = a.recipe or _default_recipe(name)
     if p := _shipped_before(res["run"]["args"].get("init"), name, results, res["run"]): res["run"]["init_from"] = p
     res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
                                                       threads=a.threads, torch=torch.__version__)
