@@ -78,6 +78,11 @@ def species_train(name: str, run=None, data=None, device: str = "cpu", threads: 
 PLURAL = dict(elm="elms", hickory="hickories", shadbush="shadbushes", spruce="spruces", tulip="tulip trees",
               vitellaria="shea trees")
 
+# %% ../nbs/05a_species_runs.ipynb #d6b7c185
+def _default_recipe(name: str) -> str:
+    "The command that makes species `name`'s model, where its record names none: `make elm` for the elm."
+    return "make elm" if name == "elm" else f"make species SPECIES={name}"
+
 # %% ../nbs/05a_species_runs.ipynb #0108f4ac
 def _card_head(res: dict, max_len: int) -> str:
     "The card's title and its list: data, model, training, command, commit."
@@ -86,7 +91,7 @@ def _card_head(res: dict, max_len: int) -> str:
     stopped = ("" if run["last_step"] >= ar.get("steps", 0) else
                f" of a {ar['steps']:,}-step schedule (stopped by --time-limit)")
     epochs = run["last_step"] * ar["batch_size"] * ar["world"] / d["train"]
-    cmd = res.get("recipe", "make elm")
+    cmd = res.get("recipe", _default_recipe(name))
     how = f"`{run['trained_by']}` (training), then `{cmd}`" if run.get("trained_by") else f"`{cmd}` (resumable)"
     where = run.get("device") or "2 shared CPU cores"
     window = f", window {ar['window']} in the full-resolution layers" if ar.get("window") else ""
@@ -249,11 +254,6 @@ def ship_parser() -> argparse.ArgumentParser:
     p.add_argument("--recard", action="store_true", help="no evaluation: the card (and the record's targets) anew "
                    "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
     return p
-
-# %% ../nbs/05a_species_runs.ipynb #d6b7c185
-def _default_recipe(name: str) -> str:
-    "The command that makes species `name`'s model, where its record names none: `make elm` for the elm."
-    return "make elm" if name == "elm" else f"make species SPECIES={name}"
 
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
 def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
