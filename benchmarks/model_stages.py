@@ -12,6 +12,8 @@ import argparse, json, subprocess, sys
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 import provenance   # scripts/provenance.py
+from treebook.metrics import quality_targets
+from treebook.species_runs import record_steps
 
 
 def versions(path: str):
@@ -23,18 +25,11 @@ def versions(path: str):
         if text.returncode == 0: yield c, json.loads(text.stdout)
 
 
-def total_steps(r: dict) -> int:
-    "The steps of the model a record evaluated: its run's, and those of the shipped model the run went on from."
-    p0 = r["run"].get("init_from")
-    return r["run"]["last_step"] + (p0["steps"] if p0 else 0)
-
-
 def stage(r: dict, commit: str) -> dict:
     "The figures of one stage, from its evaluation record (the targets as counted today)."
-    from treebook.metrics import quality_targets
     s, ref, run = r["scores"], r["reference_train_vs_test"], r["run"]
     met = quality_targets(r)
-    return {"steps": total_steps(r), "run_steps": run["last_step"], "lr": run["args"].get("lr"),
+    return {"steps": record_steps(r), "run_steps": run["last_step"], "lr": run["args"].get("lr"),
             "minutes": round(run["train_seconds"] / 60, 1) if run.get("train_seconds") else None,
             "PPL": r["PPL"], "1-NNA": s["1-NNA"], "COV-CD": s["COV-CD"], "MMD-CD / ref": s["MMD-CD"] / ref["MMD-CD"],
             "JSD": s["JSD"], "FPD": s["FPD"], "Connect_free": r["Connect_free"]["Connect"],
@@ -45,7 +40,7 @@ def stages(name: str) -> list:
     "The stages of `name`'s shipped model, oldest first."
     found, want = [], None
     for c, r in versions(f"results/{name}_eval.json"):
-        n = total_steps(r)
+        n = record_steps(r)
         if want is None or n == want:
             found.append(stage(r, c))
             p0 = r["run"].get("init_from")

@@ -30,8 +30,8 @@ from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
 __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'recard', 'ship_parser', 'ship_main', 'models_table', 'parent_gaps', 'pace', 'plan_steps', 'pack_run',
-           'unpack_run', 'gpu_runs', 'parser', 'main']
+           'recard', 'ship_parser', 'record_steps', 'ship_main', 'models_table', 'parent_gaps', 'pace', 'plan_steps',
+           'pack_run', 'unpack_run', 'gpu_runs', 'parser', 'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -255,6 +255,12 @@ def ship_parser() -> argparse.ArgumentParser:
                    "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
     return p
 
+# %% ../nbs/05a_species_runs.ipynb #abf973db
+def record_steps(record: dict) -> int:
+    "The training steps of the model an evaluation record scored: its run's and those of the model it went on from."
+    p0 = record["run"].get("init_from")
+    return record["run"]["last_step"] + (p0["steps"] if p0 else 0)
+
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
 def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
     """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`):
@@ -266,8 +272,7 @@ def _shipped_before(init, name: str, results=None, run: dict | None = None) -> d
     same = lambda r: (r.get("args"), r.get("last_step"), r.get("train_seconds"))
     if run is not None and same(old["run"]) == same(run): return old["run"].get("init_from")
     prev = old["run"].get("init_from")   # a model trained in several runs: the minutes and steps of all of them
-    return {"recipe": old.get("recipe", _default_recipe(name)), "commit": old.get("commit"),
-            "steps": old["run"]["last_step"] + (prev["steps"] if prev else 0),
+    return {"recipe": old.get("recipe", _default_recipe(name)), "commit": old.get("commit"), "steps": record_steps(old),
             "minutes": (old["run"]["train_seconds"] or 0) / 60 + (prev["minutes"] if prev else 0)}
 
 
@@ -308,7 +313,7 @@ def models_table(results="results") -> str:
         s, ref, cf, run = r["scores"], r["reference_train_vs_test"], r["Connect_free"], r["run"]
         met = quality_targets(r)  # today's figures, not those stored when the record was written
         p0 = run.get("init_from")   # a run that went on from the species' shipped model: its steps and the earlier
-        steps = f"{p0['steps'] + run['last_step']:,} ({p0['steps']:,} + {run['last_step']:,})" if p0 else \
+        steps = f"{record_steps(r):,} ({p0['steps']:,} + {run['last_step']:,})" if p0 else \
             f"{run['last_step']:,}"
         rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {steps} | "
                     f"{r['data']['test']} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
