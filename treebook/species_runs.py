@@ -263,11 +263,13 @@ def record_steps(record: dict) -> int:
 
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
 def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
-    """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`):
-    {'recipe', 'steps', 'minutes', 'commit'} from the record `results`/NAME_eval.json that shipped it; else None.
+    """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`;
+    its record `results`/NAME_eval.json) or an earlier one (`init` a weights file NAME.pt, its record NAME_eval.json
+    beside it): {'recipe', 'steps', 'minutes', 'commit'} from that record; else None.
     If that record is of this very run (`run`, its record's part: evaluated again), its own answer stands."""
-    p = Path(results or "results") / f"{name}_eval.json"
-    if init != name or not p.is_file(): return None
+    p = (Path(results or "results") / f"{name}_eval.json" if init == name else
+         Path(init).with_name(f"{name}_eval.json") if init and Path(init).name == f"{name}.pt" else None)
+    if p is None or not p.is_file(): return None
     old = json.loads(p.read_text())
     same = lambda r: (r.get("args"), r.get("last_step"), r.get("train_seconds"))
     if run is not None and same(old["run"]) == same(run): return old["run"].get("init_from")
