@@ -30,6 +30,7 @@ def stage(r: dict, commit: str) -> dict:
     s, ref, run = r["scores"], r["reference_train_vs_test"], r["run"]
     met = quality_targets(r)
     return {"steps": record_steps(r), "run_steps": run["last_step"], "lr": run["args"].get("lr"),
+            "window": run["args"].get("window") or 0,   # 0: full attention
             "minutes": round(run["train_seconds"] / 60, 1) if run.get("train_seconds") else None,
             "PPL": r["PPL"], "1-NNA": s["1-NNA"], "COV-CD": s["COV-CD"], "MMD-CD / ref": s["MMD-CD"] / ref["MMD-CD"],
             "JSD": s["JSD"], "FPD": s["FPD"], "Connect_free": r["Connect_free"]["Connect"],
