@@ -3,7 +3,8 @@ each had when it shipped (chapter 05a, "Training goes on later").
 
 A model that trained on from its species' shipped weights records the earlier model's steps (`run.init_from` in
 results/NAME_eval.json). This walks the git history of that record, newest first, and follows the chain back: each
-stage is the last record of the model with that many steps in all. Writes results/model_stages.json.
+stage is the last record of the model with that many steps in all. A model that shipped and was replaced by one that
+did not go on from it (two runs from one start, compared) is kept under "replaced". Writes results/model_stages.json.
 
     .venv/bin/python benchmarks/model_stages.py                       # every shipped species, a few seconds
     .venv/bin/python benchmarks/model_stages.py --species elm --out tmp/stages.json
@@ -37,18 +38,22 @@ def stage(r: dict, commit: str) -> dict:
             "met": sum(met.values()), "of": len(met), "held_out": r["data"]["test"], "commit": commit}
 
 
-def stages(name: str) -> list:
-    "The stages of `name`'s shipped model, oldest first."
-    found, want = [], None
+def stages(name: str) -> tuple:
+    """The stages of `name`'s shipped model, oldest first, and the models that shipped and were replaced by one that
+    did not go on from them (a run from the same start, compared), newest first."""
+    found, replaced, seen, want = [], [], set(), None
     for c, r in versions(f"results/{name}_eval.json"):
-        n = record_steps(r)
+        n, run = record_steps(r), r["run"]
+        key = json.dumps([run.get("args"), run.get("last_step"), run.get("train_seconds")], sort_keys=True)
         if want is None or n == want:
-            found.append(stage(r, c))
-            p0 = r["run"].get("init_from")
+            found.append(stage(r, c)); seen.add(key)
+            p0 = run.get("init_from")
             if not p0: break
             want = p0["steps"]
+        elif key not in seen:   # a model no stage went on from (a record evaluated again is the same model)
+            replaced.append(stage(r, c)); seen.add(key)
     if not found: raise SystemExit(f"error: results/{name}_eval.json has no committed version")
-    return found[::-1]
+    return found[::-1], replaced
 
 
 if __name__ == "__main__":
@@ -57,7 +62,10 @@ if __name__ == "__main__":
     p.add_argument("--out", default="results/model_stages.json")
     a = p.parse_args()
     from treebook.train import shipped_species
-    res = {"species": {n: stages(n) for n in (a.species or shipped_species())}}
+    got = {n: stages(n) for n in (a.species or shipped_species())}
+    res = {"species": {n: g[0] for n, g in got.items()}, "replaced": {n: g[1] for n, g in got.items() if g[1]}}
     provenance.record("benchmarks/model_stages.py", res, a.out)
     for n, st in res["species"].items():
         print(n, " -> ".join(f"{s['steps']:,} ({s['1-NNA']:.3f}, {s['met']} of {s['of']})" for s in st))
+    for n, st in res["replaced"].items():
+        print(n, "replaced:", ", ".join(f"{s['steps']:,} (window {s['window']}, {s['1-NNA']:.3f})" for s in st))
