@@ -14,7 +14,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 import provenance   # scripts/provenance.py
 from treebook.metrics import quality_targets
-from treebook.species_runs import record_steps
+from treebook.species_runs import record_steps, run_key
 
 
 def versions(path: str):
@@ -44,7 +44,7 @@ def stages(name: str) -> tuple:
     found, replaced, seen, want = [], [], set(), None
     for c, r in versions(f"results/{name}_eval.json"):
         n, run = record_steps(r), r["run"]
-        key = json.dumps([run.get("args"), run.get("last_step"), run.get("train_seconds")], sort_keys=True)
+        key = run_key(run)
         if want is None or n == want:
             found.append(stage(r, c)); seen.add(key)
             p0 = run.get("init_from")

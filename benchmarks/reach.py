@@ -11,6 +11,7 @@ that this call does not run.
     .venv/bin/python benchmarks/reach.py --species elm --n 4 --trees 4 --out tmp/reach.json   # a check
     .venv/bin/python benchmarks/reach.py --species hickory --model runs/hickory/best.pt --key hickory-2300
                                                     # a model that does not ship, as its own row
+    .venv/bin/python benchmarks/reach.py --drop hickory-2300              # a row no longer wanted, nothing run
 """
 import argparse, json, os, sys, time
 from pathlib import Path
@@ -40,9 +41,16 @@ if __name__ == "__main__":
     p.add_argument("--seed", type=int, default=0); p.add_argument("--threads", type=int, default=None)
     p.add_argument("--model", default=None, help="a checkpoint (.pt) instead of the species' shipped model")
     p.add_argument("--key", default=None, help="the row's name (default the species'); with --model, one species")
+    p.add_argument("--drop", nargs="+", default=None, metavar="KEY", help="remove these rows; runs nothing")
     p.add_argument("--out", default="results/reach.json")
     a = p.parse_args()
     if (a.model or a.key) and len(a.species or []) != 1: p.error("--model and --key go with one --species")
+    if a.drop:
+        out = Path(a.out)
+        old = json.loads(out.read_text()) if out.is_file() else {"species": {}}
+        if gone := [k for k in a.drop if k not in old["species"]]: p.error(f"{a.out} has no row {', '.join(gone)}")
+        for k in a.drop: del old["species"][k]
+        out.write_text(json.dumps(old, indent=1)); print("dropped", ", ".join(a.drop)); sys.exit(0)
     import torch
     from tqdm.auto import tqdm
     from treebook.botany import species, grow_tree

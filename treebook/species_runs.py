@@ -30,8 +30,8 @@ from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
 __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'recard', 'ship_parser', 'record_steps', 'ship_main', 'models_table', 'parent_gaps', 'pace', 'plan_steps',
-           'pack_run', 'unpack_run', 'gpu_runs', 'parser', 'main']
+           'recard', 'ship_parser', 'record_steps', 'run_key', 'ship_main', 'models_table', 'parent_gaps', 'pace',
+           'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs', 'parser', 'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -261,6 +261,11 @@ def record_steps(record: dict) -> int:
     p0 = record["run"].get("init_from")
     return record["run"]["last_step"] + (p0["steps"] if p0 else 0)
 
+# %% ../nbs/05a_species_runs.ipynb #4439f3f5
+def run_key(run: dict) -> str:
+    "The identity of a record's training run (its `run` part): arguments, last step and training seconds."
+    return json.dumps([run.get("args"), run.get("last_step"), run.get("train_seconds")], sort_keys=True)
+
 # %% ../nbs/05a_species_runs.ipynb #a516ed63
 def _shipped_before(init, name: str, results=None, run: dict | None = None) -> dict | None:
     """How the model a run started from was trained, when it is the species' own shipped model (`init` == `name`;
@@ -271,8 +276,7 @@ def _shipped_before(init, name: str, results=None, run: dict | None = None) -> d
          Path(init).with_name(f"{name}_eval.json") if init and Path(init).name == f"{name}.pt" else None)
     if p is None or not p.is_file(): return None
     old = json.loads(p.read_text())
-    same = lambda r: (r.get("args"), r.get("last_step"), r.get("train_seconds"))
-    if run is not None and same(old["run"]) == same(run): return old["run"].get("init_from")
+    if run is not None and run_key(old["run"]) == run_key(run): return old["run"].get("init_from")
     prev = old["run"].get("init_from")   # a model trained in several runs: the minutes and steps of all of them
     return {"recipe": old.get("recipe", _default_recipe(name)), "commit": old.get("commit"), "steps": record_steps(old),
             "minutes": (old["run"]["train_seconds"] or 0) / 60 + (prev["minutes"] if prev else 0)}
