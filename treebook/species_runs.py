@@ -30,8 +30,9 @@ from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
 __all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'recard', 'ship_parser', 'record_steps', 'run_key', 'ship_main', 'models_table', 'parent_gaps', 'pace',
-           'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs', 'parser', 'main']
+           'recard', 'ship_parser', 'record_steps', 'run_key', 'ship_main', 'models_table', 'parent_gaps',
+           'relative_lengths', 'long_share', 'pace', 'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs', 'parser',
+           'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -357,6 +358,24 @@ def parent_gaps(tokens, tok) -> tuple:
             j = i - 1 - int(np.argmin(d[::-1]))
         gaps.append(i - j); counted.append(anchored[i])
     return np.array(gaps, np.int64), np.array(counted, bool)
+
+# %% ../nbs/05a_species_runs.ipynb #c5684b9f
+def relative_lengths(tree) -> np.ndarray:
+    "Each branch's length over the height of the tree `tree` (from its lowest point to its highest)."
+    z = np.concatenate([tree.start[:, 2], tree.end[:, 2]])
+    h = float(z.max() - z.min())
+    if not h > 0: raise TreebookError("a tree of no height has no relative branch lengths")
+    return np.linalg.norm(tree.end[:, :3] - tree.start[:, :3], axis=1) / h
+
+# %% ../nbs/05a_species_runs.ipynb #42bbb757
+def long_share(trees, reference, q: float = 0.999) -> dict:
+    """How the branches of `trees` compare in length with those of the trees `reference` (relative to each tree's
+    height): the `reference` lengths' `q` quantile, the share of both above it, and both 99th percentiles."""
+    if not len(trees) or not len(reference): raise TreebookError("long_share needs trees and reference trees")
+    a, r = (np.concatenate([relative_lengths(t) for t in ts]) for ts in (trees, reference))
+    cut = float(np.quantile(r, q))
+    return dict(threshold=cut, share=float((a > cut).mean()), reference_share=float((r > cut).mean()),
+                q99=float(np.quantile(a, 0.99)), reference_q99=float(np.quantile(r, 0.99)), branches=int(len(a)))
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949
 def pace(log_csv) -> float | None:
