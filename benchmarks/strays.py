@@ -1,10 +1,13 @@
 """Branches that span the crown: how the branch lengths of sampled trees compare with procedural ones (chapter 05a,
-`long_share`), with structure-aware decoding (as `treebook sample` draws) and without it.
+`long_share`), with structure-aware decoding (as `treebook sample` draws), without it, and drawn without it and
+snapped (`structure="snap"`: each loose start moved onto the nearest earlier end).
 
 For each species whose model ships (or --model as row --key): --trees procedural trees of the model's branch cap
-and --n samples each way; the share of the samples' branches longer (over their tree's height) than the procedural
-branches' 99.9th percentile, and both 99th percentiles. Writes results/strays.json, keeping rows this call does not
-run, and results/strays_NAME.png for --picture NAME: two procedural trees and two samples, the long branches red.
+and --n samples each way (the same seed each way: the snapped are the free ones, repaired); the share of the
+samples' branches longer (over their tree's height) than the procedural branches' 99.9th percentile, and than twice
+it, and both 99th percentiles. Writes results/strays.json, keeping rows this call does not run, and
+results/strays_NAME.png for --picture NAME: two procedural trees, two samples by structure-aware decoding and the same
+two snapped; long branches red.
 
     .venv/bin/python benchmarks/strays.py                        # every shipped species, some minutes
     .venv/bin/python benchmarks/strays.py --species elm --n 2 --trees 2 --out tmp/strays.json --picture none
@@ -16,13 +19,13 @@ import provenance   # scripts/provenance.py
 
 
 def picture(procedural, samples, cut, path):
-    "Two procedural trees, then two samples, side by side; branches longer than `cut` marked by red points."
+    "Two procedural trees, then the `samples`, side by side; branches longer than `cut` marked by red points."
     import numpy as np
     from PIL import Image
     from treebook.render import render
     from treebook.species_runs import relative_lengths
     tiles = []
-    for t in list(procedural[:2]) + list(samples[:2]):
+    for t in list(procedural[:2]) + list(samples):
         long = np.flatnonzero(relative_lengths(t) > cut)
         s = np.linspace(0, 1, 40)[:, None]
         pts = [t.start[i, :3] + s * (t.end[i, :3] - t.start[i, :3]) for i in long]
@@ -64,13 +67,14 @@ if __name__ == "__main__":
         t0 = time.time()
         sa = sample_trees(a.n, model=(net, tok), seed=a.seed, structure=True, progress=True)
         free = sample_trees(a.n, model=(net, tok), seed=a.seed, structure=False, progress=True)
+        snap = sample_trees(a.n, model=(net, tok), seed=a.seed, structure="snap", progress=True)
         key = a.key or name
         rows[key] = dict(window=net.config.window, max_branches=cap, structure=long_share(sa, ref),
-                         free=long_share(free, ref), seconds=time.time() - t0, model=model,
+                         free=long_share(free, ref), snap=long_share(snap, ref), seconds=time.time() - t0, model=model,
                          command="python benchmarks/strays.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
                          time=time.strftime("%Y-%m-%d %H:%M:%S"))
         print(key, json.dumps(rows[key]), flush=True)
         if a.picture == name:
-            picture(ref, sa, rows[key]["structure"]["threshold"], out.parent / f"strays_{key}.png")
+            picture(ref, sa[:2] + snap[:2], rows[key]["structure"]["threshold"], out.parent / f"strays_{key}.png")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"n": a.n, "trees": a.trees, "seed": a.seed, "species": rows}, indent=1))

@@ -16,7 +16,7 @@ from .tree import TreebookError
 from .hourglass import DecodeState, TreeTransformer
 
 # %% auto #0
-__all__ = ['CONTRACT', 'pick', 'pick_block', 'TreeGrammar', 'token_connectivity', 'sample']
+__all__ = ['CONTRACT', 'pick', 'pick_block', 'TreeGrammar', 'token_connectivity', 'sample', 'snap_starts']
 
 # %% ../nbs/04a_sampling.ipynb #ac396765
 def pick(logits, allowed=None, temperature: float = 1.0, top_k: int | None = None, top_p: float | None = None,
@@ -223,3 +223,21 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
         if cache and t + 1 < max_len: logits = model.extend(nxt[:, None], state)[:, -1]
     out = [seqs[i, offset:length[i]].numpy().copy() for i in range(n)]
     return (out, torch.stack(all_logits, 1)) if return_logits else out
+
+# %% ../nbs/04a_sampling.ipynb #92e4b2ef
+def snap_starts(seq, tok) -> np.ndarray:
+    """A copy of token sequence `seq` in which the first branch starts at the root cell and every later one at an
+    earlier branch's end: a start that is not moves to the nearest (in cells), so the sequence reads as one tree."""
+    seq = np.array(seq, dtype=np.int64)
+    m = max(0, (len(seq) - 8) // 8)
+    V = seq[8:8 + 8 * m].reshape(-1, 8)
+    root = np.asarray(tok.root_tokens, dtype=np.int64)[None]
+    ends = []
+    for i in np.flatnonzero((V < tok.n_values).all(1)):
+        E = np.concatenate(ends) if ends else root        # the first branch starts at the root cell
+        if not (E == V[i, :3]).all(1).any():
+            d = np.linalg.norm((E - V[i, :3]).astype(float), axis=1)
+            V[i, :3] = E[len(d) - 1 - int(np.argmin(d[::-1]))]
+        ends.append(V[i, 4:7][None])
+    seq[8:8 + 8 * m] = V.reshape(-1)
+    return seq

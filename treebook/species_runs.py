@@ -370,11 +370,13 @@ def relative_lengths(tree) -> np.ndarray:
 # %% ../nbs/05a_species_runs.ipynb #42bbb757
 def long_share(trees, reference, q: float = 0.999) -> dict:
     """How the branches of `trees` compare in length with those of the trees `reference` (relative to each tree's
-    height): the `reference` lengths' `q` quantile, the share of both above it, and both 99th percentiles."""
+    height): the `reference` lengths' `q` quantile, the share of both above it and above twice it, and both 99th
+    percentiles."""
     if not len(trees) or not len(reference): raise TreebookError("long_share needs trees and reference trees")
     a, r = (np.concatenate([relative_lengths(t) for t in ts]) for ts in (trees, reference))
     cut = float(np.quantile(r, q))
     return dict(threshold=cut, share=float((a > cut).mean()), reference_share=float((r > cut).mean()),
+                twice=float((a > 2 * cut).mean()), reference_twice=float((r > 2 * cut).mean()),
                 q99=float(np.quantile(a, 0.99)), reference_q99=float(np.quantile(r, 0.99)), branches=int(len(a)))
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949

@@ -393,20 +393,23 @@ def _batch_seed(seed: int, k: int) -> int:
 
 # %% ../nbs/05_train.ipynb #1e745d48
 def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0, top_p: float | None = None,
-                 top_k: int | None = None, seed: int = 0, structure: bool = True, progress: bool = False,
+                 top_k: int | None = None, seed: int = 0, structure: bool | str = True, progress: bool = False,
                  batch_size: int = 256, species: str | None = None) -> list:
     """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair; default `elm`)
-    or from the shipped model of `species`; `structure` keeps every tree connected. They are drawn `batch_size` at a
-    time, so memory stays bounded however large `n` is."""
+    or from the shipped model of `species`; `structure` keeps every tree connected: True by structure-aware decoding,
+    "snap" by drawing freely and moving each loose start onto the nearest earlier end (`snap_starts`). They are drawn
+    `batch_size` at a time, so memory stays bounded however large `n` is."""
     if model is not None and species is not None: raise TreebookError("give a model or a species, not both")
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
     if not (math.isfinite(temperature) and temperature >= 0):
         raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
+    if not (structure is True or structure is False or structure == "snap"):
+        raise TreebookError(f"structure must be True, False or 'snap', got {structure!r}")
     model = species_model(species) if species is not None else "elm" if model is None else model
     net, tok = load_pretrained(model) if isinstance(model, (str, Path)) else model
-    from treebook.sampling import sample
+    from treebook.sampling import sample, snap_starts
     threads = torch.get_num_threads()
     # one token at a time is many tiny operations: one thread is faster, and much faster on a busy machine
     torch.set_num_threads(1)
@@ -415,8 +418,9 @@ def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0
     try:
         for k, i in enumerate(starts):
             seqs = sample(net, min(batch_size, n - i), tok=tok, temperature=temperature, top_k=top_k, top_p=top_p,
-                          structure=structure, min_len=24, seed=_batch_seed(seed, k), progress=progress
+                          structure=structure is True, min_len=24, seed=_batch_seed(seed, k), progress=progress
                           and len(starts) == 1)
+            if structure == "snap": seqs = [snap_starts(s, tok) for s in seqs]
             trees += [tok.decode(s) for s in seqs]; bar.update(len(seqs))
     finally: torch.set_num_threads(threads); bar.close()
     return trees
