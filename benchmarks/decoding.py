@@ -2,9 +2,10 @@
 the distribution: each shipped species' samples both ways against the same procedural trees (chapter 05a).
 
 For each species (default: every one whose model ships): --n samples each way (seed 0), and 2 x --n procedural trees
-grown afresh (seeds from 2,000,000 and 3,000,000, outside every dataset's): the first --n are the reference, the other
---n are scored against them as the data's own figures. MMD-CD, COV-CD, 1-NNA, JSD and FPD of each against the
-reference, and Connect. Writes results/decoding.json, keeping rows this call does not run.
+grown afresh (seeds from 2,000,000 and 3,000,000, none of them a seed of the datasets' trees: checked in 05a). The
+first --n are the reference, the other --n are scored against them as the data's own figures. MMD-CD, COV-CD, 1-NNA,
+JSD and FPD of each against the reference, and `long_share`. Writes results/decoding.json, keeping rows this call
+does not run.
 
     .venv/bin/python benchmarks/decoding.py --species spruce            # 200 a way: some minutes a species
     .venv/bin/python benchmarks/decoding.py --species elm --n 4 --out tmp/decoding.json   # a check

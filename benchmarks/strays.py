@@ -76,5 +76,5 @@ if __name__ == "__main__":
         print(key, json.dumps(rows[key]), flush=True)
         if a.picture == name:
             picture(ref, sa[:2] + snap[:2], rows[key]["structure"]["threshold"], out.parent / f"strays_{key}.png")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"n": a.n, "trees": a.trees, "seed": a.seed, "species": rows}, indent=1))
+        out.parent.mkdir(parents=True, exist_ok=True)   # after each species: an interrupted call keeps what it did
+        out.write_text(json.dumps({"n": a.n, "trees": a.trees, "seed": a.seed, "species": rows}, indent=1))
