@@ -405,6 +405,7 @@ def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0
         raise TreebookError(f"temperature must be a finite number >= 0, got {temperature}")
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
+    if isinstance(structure, np.bool_): structure = bool(structure)
     if not (structure is True or structure is False or structure == "snap"):
         raise TreebookError(f"structure must be True, False or 'snap', got {structure!r}")
     model = species_model(species) if species is not None else "elm" if model is None else model
