@@ -140,6 +140,11 @@ def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100)
                      for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD"))
     rows += f"\n| Novel | {s['Novel']:.4g} | - |"
     cs, cf = res["Connect_structure"], res["Connect_free"]
+    lg = res.get("long")   # records from before `long_share` lack it
+    lg = "" if lg is None else f"""
+- Branches that span the crown (`long_share`): {lg['twice']:.2%} of the samples' branches are longer, over their \
+tree's height, than twice the held-out trees' 99.9th percentile ({lg['threshold']:.3f}), against \
+{lg['reference_twice']:.2%} of the held-out trees' own; 99th percentiles {lg['q99']:.3f} and {lg['reference_q99']:.3f}"""
     return _card_head(res, max_len) + f"""
 ## Scores on the held-out {PLURAL[name]}
 
@@ -153,7 +158,7 @@ def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100)
 
 - PPL on the held-out {d['test']}: {res['PPL']:.3f}
 - Connect with structure-aware decoding: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
-without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f})
+without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f}){lg}
 
 ## Against the figures every species' model is held to
 
@@ -221,6 +226,7 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
     sc = sample_scores(seqs, free, tok, R, T, pn)
     res |= {k: sc[k] for k in ("Connect_structure", "Connect_free")} | {"empty_samples": n_samples - len(sc["trees"]),
             "branches_mean": float(np.mean([g.n for g in sc["trees"]])), "scores": sc["scores"]}
+    res["long"] = long_share(sc["trees"], test)   # branches that span the crown (below)
     res["reference_train_vs_test"] = evaluate(T[:len(R)], R) | {"FPD": fpd(T[:len(R)], R, pn)}
     res["seconds_metrics"] = time.time() - t; res["targets"] = quality_targets(res)
     return res
@@ -371,13 +377,16 @@ def relative_lengths(tree) -> np.ndarray:
 def long_share(trees, reference, q: float = 0.999) -> dict:
     """How the branches of `trees` compare in length with those of the trees `reference` (relative to each tree's
     height): the `reference` lengths' `q` quantile, the share of both above it and above twice it, and both 99th
-    percentiles."""
-    if not len(trees) or not len(reference): raise TreebookError("long_share needs trees and reference trees")
-    a, r = (np.concatenate([relative_lengths(t) for t in ts]) for ts in (trees, reference))
+    percentiles. Trees of no height (a flat degenerate sample) have no relative lengths: they are left out and counted
+    (`flat`)."""
+    tall = [[t for t in ts if np.ptp(np.concatenate([t.start[:, 2], t.end[:, 2]])) > 0] for ts in (trees, reference)]
+    if not all(tall): raise TreebookError("long_share needs trees and reference trees (of some height)")
+    a, r = (np.concatenate([relative_lengths(t) for t in ts]) for ts in tall)
     cut = float(np.quantile(r, q))
     return dict(threshold=cut, share=float((a > cut).mean()), reference_share=float((r > cut).mean()),
                 twice=float((a > 2 * cut).mean()), reference_twice=float((r > 2 * cut).mean()),
-                q99=float(np.quantile(a, 0.99)), reference_q99=float(np.quantile(r, 0.99)), branches=int(len(a)))
+                q99=float(np.quantile(a, 0.99)), reference_q99=float(np.quantile(r, 0.99)), branches=int(len(a)),
+                flat=len(trees) - len(tall[0]))
 
 # %% ../nbs/05a_species_runs.ipynb #f3616949
 def pace(log_csv) -> float | None:
