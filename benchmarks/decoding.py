@@ -28,9 +28,8 @@ if __name__ == "__main__":
     from treebook.metrics import evaluate, fpd, load_species_pointnet, tree_clouds
     from treebook.species_runs import long_share
     from treebook.train import load_pretrained, sample_trees, shipped_species, species_model
-    out = Path(a.out)
-    old = json.loads(out.read_text()) if out.is_file() else {}
-    rows = old.get("species", {}) if (old.get("n"), old.get("seed")) == (a.n, a.seed) else {}
+    out, settings = Path(a.out), dict(n=a.n, seed=a.seed)
+    rows = provenance.kept_rows(out, **settings)
     pn = load_species_pointnet()
     for name in a.species or shipped_species():
         net, tok = load_pretrained(species_model(name))
@@ -50,9 +49,7 @@ if __name__ == "__main__":
                 "long": long_share(trees, ref), "branches_mean": float(np.mean([t.n for t in trees])),
                 "seconds_metrics": time.time() - t0}
         rows[name] = row | {"window": net.config.window, "max_branches": cap,
-                            "command": "python benchmarks/decoding.py " + " ".join(sys.argv[1:]),
-                            "commit": provenance.commit(), "time": time.strftime("%Y-%m-%d %H:%M:%S")}
+                            **provenance.stamp("benchmarks/decoding.py")}
         print(name, json.dumps({w: {k: round(v, 4) for k, v in row[w].items() if isinstance(v, float)} for w in row}),
               flush=True)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps({"n": a.n, "seed": a.seed, "species": rows}, indent=1))
+        provenance.write_rows(out, rows, **settings)   # after each species

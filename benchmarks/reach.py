@@ -59,8 +59,7 @@ if __name__ == "__main__":
     from treebook.train import load_pretrained, shipped_species, species_model
     if a.threads: torch.set_num_threads(a.threads)
     out = Path(a.out)
-    old = json.loads(out.read_text()) if out.is_file() else {}
-    rows = old.get("species", {}) if old.get("far") == a.far and old.get("seed") == a.seed else {}
+    rows = provenance.kept_rows(out, far=a.far, seed=a.seed)
     for name in a.species or shipped_species():
         model = a.model or species_model(name)
         net, tok = load_pretrained(model)
@@ -72,9 +71,6 @@ if __name__ == "__main__":
         free = summary([parent_gaps(s, tok) for s in seqs], a.far) | {"samples": a.n, "seconds": time.time() - t0}
         key = a.key or name
         rows[key] = dict(window=net.config.window, max_branches=cap, procedural=proc | {"trees": a.trees}, free=free,
-                         command="python benchmarks/reach.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
-                         time=time.strftime("%Y-%m-%d %H:%M:%S"), model=model)
+                         model=model, **provenance.stamp("benchmarks/reach.py"))
         print(key, json.dumps(rows[key]), flush=True)
-    res = {"far": a.far, "seed": a.seed, "n": a.n, "trees": a.trees, "species": rows}
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1))
+        provenance.write_rows(out, rows, far=a.far, seed=a.seed, n=a.n, trees=a.trees)   # after each species

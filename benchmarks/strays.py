@@ -21,8 +21,7 @@ import provenance   # scripts/provenance.py
 def picture(procedural, samples, cut, path):
     "Two procedural trees, then the `samples`, side by side; branches longer than `cut` marked by red points."
     import numpy as np
-    from PIL import Image
-    from treebook.render import render
+    from treebook.render import image_grid, render
     from treebook.species_runs import relative_lengths
     tiles = []
     for t in list(procedural[:2]) + list(samples):
@@ -33,9 +32,7 @@ def picture(procedural, samples, cut, path):
         red = None if pts is None else np.tile([[220, 30, 30]], (len(pts), 1))
         scene = [t] + ([pts] if pts is not None else [])
         tiles.append(render(scene, view="front", size=(360, 360), colors=red).convert("RGB"))
-    im = Image.new("RGB", (360 * len(tiles), 360), "white")
-    for k, tile in enumerate(tiles): im.paste(tile, (360 * k, 0))
-    im.save(path)
+    image_grid(tiles, ncols=len(tiles), pad=0).save(path)
 
 
 if __name__ == "__main__":
@@ -56,9 +53,8 @@ if __name__ == "__main__":
     from treebook.species_runs import long_share
     from treebook.train import load_pretrained, sample_trees, shipped_species, species_model
     if a.threads: torch.set_num_threads(a.threads)
-    out = Path(a.out)
-    old = json.loads(out.read_text()) if out.is_file() else {}
-    rows = old.get("species", {}) if (old.get("n"), old.get("trees"), old.get("seed")) == (a.n, a.trees, a.seed) else {}
+    out, settings = Path(a.out), dict(n=a.n, trees=a.trees, seed=a.seed)
+    rows = provenance.kept_rows(out, **settings)
     for name in a.species or shipped_species():
         model = a.model or species_model(name)
         net, tok = load_pretrained(model)
@@ -71,10 +67,8 @@ if __name__ == "__main__":
         key = a.key or name
         rows[key] = dict(window=net.config.window, max_branches=cap, structure=long_share(sa, ref),
                          free=long_share(free, ref), snap=long_share(snap, ref), seconds=time.time() - t0, model=model,
-                         command="python benchmarks/strays.py " + " ".join(sys.argv[1:]), commit=provenance.commit(),
-                         time=time.strftime("%Y-%m-%d %H:%M:%S"))
+                         **provenance.stamp("benchmarks/strays.py"))
         print(key, json.dumps(rows[key]), flush=True)
         if a.picture == name:
             picture(ref, sa[:2] + snap[:2], rows[key]["structure"]["threshold"], out.parent / f"strays_{key}.png")
-        out.parent.mkdir(parents=True, exist_ok=True)   # after each species: an interrupted call keeps what it did
-        out.write_text(json.dumps({"n": a.n, "trees": a.trees, "seed": a.seed, "species": rows}, indent=1))
+        provenance.write_rows(out, rows, **settings)   # after each species: an interrupted call keeps what it did

@@ -36,3 +36,30 @@ def record(script: str, res: dict, out, **machine) -> dict:
     tmp = out.with_name(f".{out.name}.part")
     tmp.write_text(json.dumps(res, indent=1)); tmp.replace(out)
     return res
+
+
+def stamp(script: str) -> dict:
+    "A row's command (`script` and this process's arguments), commit and time, for records written row by row."
+    import sys, time
+    return {"command": " ".join(["python", script, *sys.argv[1:]]), "commit": commit(),
+            "time": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def kept_rows(out, **same) -> dict:
+    """The rows (its "species") of the record at `out` (relative to the repository) if it was made with the settings
+    `same`, so that a call which runs some rows keeps the others; else none."""
+    import json
+    out = ROOT / out
+    old = json.loads(out.read_text()) if out.is_file() else {}
+    return dict(old.get("species", {})) if all(old.get(k) == v for k, v in same.items()) else {}
+
+
+def write_rows(out, rows: dict, **settings) -> dict:
+    """The record `settings` with `rows` as its "species", written as JSON to `out` (relative to the repository) by
+    way of a temporary name, so that a call stopped while writing leaves the record before it; returns it."""
+    import json
+    res, out = settings | {"species": rows}, ROOT / out
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.part")
+    tmp.write_text(json.dumps(res, indent=1)); tmp.replace(out)
+    return res
