@@ -53,3 +53,20 @@ def test_record(monkeypatch, tmp_path):
     assert back["machine"]["threads"] == 2 and not list((tmp_path / "r").glob(".*.part"))
     res = provenance.record("scripts/x.py", {"score": 1}, tmp_path / "y.json")
     assert res["command"] == "python scripts/x.py --n 3"
+
+
+def test_rows_kept_only_with_the_same_settings(monkeypatch, tmp_path):
+    "A benchmark that writes row by row keeps the rows of an earlier call made with the same settings, and no others."
+    monkeypatch.setenv("TREEBOOK_COMMIT", "0123456789abcdef")
+    monkeypatch.setattr(sys, "argv", ["b.py", "--species", "elm"])
+    out = tmp_path / "b.json"
+    assert provenance.kept_rows(out, n=2) == {}   # no record yet
+    row = {"x": 1} | provenance.stamp("benchmarks/b.py")
+    assert row["command"] == "python benchmarks/b.py --species elm" and row["commit"] == "0123456789abcdef"
+    res = provenance.write_rows(out, {"elm": row}, n=2, seed=0)
+    assert json.loads(out.read_text()) == res == {"n": 2, "seed": 0, "species": {"elm": row}}
+    assert not list(tmp_path.glob(".*.part"))
+    assert provenance.kept_rows(out, n=2, seed=0) == {"elm": row} == provenance.kept_rows(out, n=2)
+    assert provenance.kept_rows(out, n=3, seed=0) == {}   # other settings: the rows are not comparable
+    kept = provenance.kept_rows(out, n=2); kept["tulip"] = {}
+    assert "tulip" not in provenance.kept_rows(out, n=2)   # a copy: adding rows writes nothing until write_rows
