@@ -226,7 +226,8 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
     sc = sample_scores(seqs, free, tok, R, T, pn)
     res |= {k: sc[k] for k in ("Connect_structure", "Connect_free")} | {"empty_samples": n_samples - len(sc["trees"]),
             "branches_mean": float(np.mean([g.n for g in sc["trees"]])), "scores": sc["scores"]}
-    res["long"] = long_share(sc["trees"], test)   # branches that span the crown (below)
+    try: res["long"] = long_share(sc["trees"], test)   # branches that span the crown (below)
+    except TreebookError: res["long"] = None           # no sample of any height: the card leaves the line out
     res["reference_train_vs_test"] = evaluate(T[:len(R)], R) | {"FPD": fpd(T[:len(R)], R, pn)}
     res["seconds_metrics"] = time.time() - t; res["targets"] = quality_targets(res)
     return res
