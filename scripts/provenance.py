@@ -27,11 +27,15 @@ def commit(short: bool = False) -> str:
 def record(script: str, res: dict, out, **machine) -> dict:
     """`res` after the run's command (`script` and this process's arguments), commit, time and machine (`machine`
     adds to it), written as JSON to `out` (relative to the repository) by way of a temporary name; returns it."""
-    import json, platform, sys, time
-    head = {"command": " ".join(["python", script, *sys.argv[1:]]), "commit": commit(),
-            "time": time.strftime("%Y-%m-%d %H:%M:%S"),
-            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(), **machine}}
-    res, out = head | res, ROOT / out
+    import platform
+    head = stamp(script) | {"machine": {"platform": platform.platform(), "cpus": os.cpu_count(), **machine}}
+    return _write(head | res, out)
+
+
+def _write(res: dict, out) -> dict:
+    "`res` as JSON at `out` (relative to the repository), by way of a temporary name: a stopped call leaves the old."
+    import json
+    out = ROOT / out
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.part")
     tmp.write_text(json.dumps(res, indent=1)); tmp.replace(out)
@@ -39,7 +43,7 @@ def record(script: str, res: dict, out, **machine) -> dict:
 
 
 def stamp(script: str) -> dict:
-    "A row's command (`script` and this process's arguments), commit and time, for records written row by row."
+    "The command (`script` and this process's arguments), commit and time: a record's head, or a row's."
     import sys, time
     return {"command": " ".join(["python", script, *sys.argv[1:]]), "commit": commit(),
             "time": time.strftime("%Y-%m-%d %H:%M:%S")}
@@ -55,11 +59,5 @@ def kept_rows(out, **same) -> dict:
 
 
 def write_rows(out, rows: dict, **settings) -> dict:
-    """The record `settings` with `rows` as its "species", written as JSON to `out` (relative to the repository) by
-    way of a temporary name, so that a call stopped while writing leaves the record before it; returns it."""
-    import json
-    res, out = settings | {"species": rows}, ROOT / out
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.part")
-    tmp.write_text(json.dumps(res, indent=1)); tmp.replace(out)
-    return res
+    """The record `settings` with `rows` as its "species", written to `out` as `record` writes; returns it."""
+    return _write(settings | {"species": rows}, out)

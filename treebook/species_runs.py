@@ -369,8 +369,7 @@ def parent_gaps(tokens, tok) -> tuple:
 # %% ../nbs/05a_species_runs.ipynb #c5684b9f
 def relative_lengths(tree) -> np.ndarray:
     "Each branch's length over the height of the tree `tree` (from its lowest point to its highest)."
-    z = np.concatenate([tree.start[:, 2], tree.end[:, 2]])
-    h = float(z.max() - z.min())
+    h = tree.height   # from its lowest point to its highest (chapter 00)
     if not h > 0: raise TreebookError("a tree of no height has no relative branch lengths")
     return np.linalg.norm(tree.end[:, :3] - tree.start[:, :3], axis=1) / h
 
@@ -380,7 +379,7 @@ def long_share(trees, reference, q: float = 0.999) -> dict:
     height): the `reference` lengths' `q` quantile, the share of both above it and above twice it, and both 99th
     percentiles. Trees of no height (a flat degenerate sample) have no relative lengths: they are left out and counted
     (`flat`)."""
-    tall = [[t for t in ts if np.ptp(np.concatenate([t.start[:, 2], t.end[:, 2]])) > 0] for ts in (trees, reference)]
+    tall = [[t for t in ts if t.height > 0] for ts in (trees, reference)]
     if not all(tall): raise TreebookError("long_share needs trees and reference trees (of some height)")
     a, r = (np.concatenate([relative_lengths(t) for t in ts]) for ts in tall)
     cut = float(np.quantile(r, q))
