@@ -14,6 +14,7 @@ import shutil
 import subprocess
 import sys
 import tarfile
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -130,6 +131,10 @@ def _target_lines(res: dict) -> str:
         return f"- {k}: {'met' if met else 'NOT met'}{why}"
     return "\n".join(line(k, v) for k, v in res["targets"].items())
 
+# %% ../nbs/05a_species_runs.ipynb #66b0cbb1
+_DECODING = {False: "structure-aware decoding",
+             True: "drawn freely with each loose branch start snapped onto the nearest earlier end (`snap_starts`)"}
+
 # %% ../nbs/05a_species_runs.ipynb #f1453f45
 def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100) -> str:
     ("The model card (markdown) of a species' model from its evaluation record `res`: `_card_head`, then the scores; "
@@ -140,7 +145,8 @@ def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100)
                      for k in ("MMD-CD", "COV-CD", "1-NNA", "JSD", "Unique", "FPD"))
     rows += f"\n| Novel | {s['Novel']:.4g} | - |"
     cs, cf = res["Connect_structure"], res["Connect_free"]
-    lg = res.get("long")   # records from before `long_share` lack it
+    lg, snap = res.get("long"), smp.get("decoding") == "snap"   # records from before these lack them
+    how = "of these snapped samples" if snap else "with structure-aware decoding"
     lg = "" if lg is None else f"""
 - Branches that span the crown (`long_share`): {lg['twice']:.2%} of the samples' branches are longer, over their \
 tree's height, than twice the held-out trees' 99.9th percentile ({lg['threshold']:.3f}), against \
@@ -148,7 +154,7 @@ tree's height, than twice the held-out trees' 99.9th percentile ({lg['threshold'
     return _card_head(res, max_len) + f"""
 ## Scores on the held-out {PLURAL[name]}
 
-{smp['n']} trees sampled with temperature {smp['temperature']}, top-p {smp['top_p']}, structure-aware decoding, seeds \
+{smp['n']} trees sampled with temperature {smp['temperature']}, top-p {smp['top_p']}, {_DECODING[snap]}, seeds \
 {smp['seed']}.. (batches of {batch}); clouds of 2,048 points in the radius-0.5 sphere. FPD is our stand-in for FID \
 (Frechet distance of species-PointNet features), not FID.
 
@@ -157,7 +163,7 @@ tree's height, than twice the held-out trees' 99.9th percentile ({lg['threshold'
 {rows}
 
 - PPL on the held-out {d['test']}: {res['PPL']:.3f}
-- Connect with structure-aware decoding: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
+- Connect {how}: {cs['Connect']:.3f} ({cs['Connected']:.3f} of trees fully connected); \
 without it ({n_connect} samples): {cf['Connect']:.3f} ({cf['Connected']:.3f}){lg}
 
 ## Against the figures every species' model is held to
@@ -174,53 +180,71 @@ def _init(run, ckpt: str = "best.pt"):
 
 # %% ../nbs/05a_species_runs.ipynb #749d2d36
 def _draw(job) -> list:
-    "One batch of samples: job = (seed, n, structure-aware?, temperature, top_p)."
-    from treebook.sampling import sample
+    """One batch of samples: job = (seed, n, decoding, temperature, top_p), decoding True (structure-aware), False
+    (free) or "snap" (free, then `snap_starts`)."""
+    from treebook.sampling import sample, snap_starts
     seed, n, structure, t, top_p = job
-    return sample(_W["net"], n, tok=_W["tok"], temperature=t, top_p=top_p, structure=structure, min_len=24, seed=seed)
+    seqs = sample(_W["net"], n, tok=_W["tok"], temperature=t, top_p=top_p, structure=structure is True, min_len=24,
+                  seed=seed)
+    return [snap_starts(s, _W["tok"]) for s in seqs] if structure == "snap" else seqs
 
 # %% ../nbs/05a_species_runs.ipynb #782ad728
-def _samples(run, ckpt, n_samples, n_connect, batch, seed, temperature, top_p, workers, progress) -> tuple:
-    "(structure-aware samples, free samples) of the run's model, in batches of `batch` drawn by `workers` processes."
+def _samples(run, ckpt, n_samples, n_connect, batch, seed, temperature, top_p, workers, progress,
+             structure=True) -> tuple:
+    """(the card's samples, drawn connected by `structure`: True or "snap"; free samples) of the run's model, in
+    batches of `batch` drawn by `workers` processes."""
     from tqdm.auto import tqdm
-    jobs = [(i, min(batch, n_samples - i), True) for i in range(0, n_samples, batch)]
-    jobs += [(10**6 + i, min(batch, n_connect - i), False) for i in range(0, n_connect, batch)]
+    jobs = [(i, min(batch, n_samples - i), structure, True) for i in range(0, n_samples, batch)]
+    jobs += [(10**6 + i, min(batch, n_connect - i), False, False) for i in range(0, n_connect, batch)]
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init,
                              initargs=(str(run), ckpt)) as ex:
-        done = list(tqdm(ex.map(_draw, [(seed + i, n, st, temperature, top_p) for i, n, st in jobs]),
+        done = list(tqdm(ex.map(_draw, [(seed + i, n, st, temperature, top_p) for i, n, st, _ in jobs]),
                          total=len(jobs), desc="sampling", disable=not progress))
-    return tuple([s for (_, _, st), d in zip(jobs, done) if st == want for s in d] for want in (True, False))
+    return tuple([s for (*_, card), d in zip(jobs, done) if card == want for s in d] for want in (True, False))
 
 # %% ../nbs/05a_species_runs.ipynb #85179bec
-def _run_record(run: Path, data: Path, ckpt: str, net, n_test: int, n_train: int) -> dict:
-    "The record's first parts: the species, the run (steps, seconds, arguments, device) and the dataset's counts."
+def _run_record(run: Path, data: Path, ckpt: str, net, n_test: int, n_train: int, trained: dict | None = None) -> dict:
+    """The record's first parts: the species, the run (steps, seconds, arguments, device; `trained`, a record's run
+    part, instead when the model is a shipped one) and the dataset's counts."""
     meta = torch.load(run / ckpt, map_location="cpu", weights_only=True)["meta"]
-    state, cfg = torch.load(run / "last.pt", map_location="cpu", weights_only=True), load_manifest(data)["config"]
-    rec = {"species": cfg["species"],
-           "run": {"best_step": meta["step"], "last_step": state["step"], "train_seconds": state.get("seconds"),
-                   "args": state["args"], "n_params": net.n_params, "device": state.get("device")},
-           "data": {"folder": str(data), "train": n_train, "test": n_test, "manifest_seed": cfg["seed"],
-                    "n": cfg["n"], "max_branches": cfg["max_branches"]}}
+    cfg = load_manifest(data)["config"]
+    rec = {"species": cfg["species"], "data": {"folder": str(data), "train": n_train, "test": n_test,
+                                               "manifest_seed": cfg["seed"], "n": cfg["n"],
+                                               "max_branches": cfg["max_branches"]}}
+    if trained is not None:
+        if (trained.get("best_step"), trained.get("args")) != (meta["step"], meta.get("args")):
+            raise TreebookError(f"{run / ckpt} is not the model its record describes (step {meta['step']} against "
+                                f"{trained.get('best_step')})")
+        return {"species": rec["species"], "run": dict(trained), "data": rec["data"]}
+    state = torch.load(run / "last.pt", map_location="cpu", weights_only=True)
+    rec["run"] = {"best_step": meta["step"], "last_step": state["step"], "train_seconds": state.get("seconds"),
+                  "args": state["args"], "n_params": net.n_params, "device": state.get("device")}
     rec["run"] |= {k: state[k] for k in ("trained_by", "commit") if state.get(k)}   # a run packed by gpu_runs
-    return rec
+    return {k: rec[k] for k in ("species", "run", "data")}
 
 # %% ../nbs/05a_species_runs.ipynb #53171142
 def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: int = 50, seed: int = 0,
                  temperature: float = 0.9, top_p: float = 0.95, workers: int = 2, limit: int | None = None,
-                 ckpt: str = "best.pt", progress: bool = True, n_test: int | None = None) -> dict:
+                 ckpt: str = "best.pt", progress: bool = True, n_test: int | None = None, structure: bool | str = True,
+                 trained: dict | None = None) -> dict:
     """The evaluation record of the run in `run` on the held-out split of `data` (its first `n_test` trees, if
-    given): PPL, Connect, scores, targets."""
+    given): PPL, Connect, scores, targets. The scored samples are drawn connected by `structure` (True:
+    structure-aware decoding; "snap": drawn freely, loose starts snapped); `trained` as in `_run_record`."""
+    if not (structure is True or structure == "snap"):
+        raise TreebookError(f"the scored samples are drawn connected: structure True or 'snap', got {structure!r}")
     from treebook.metrics import tree_clouds, evaluate, fpd, load_species_pointnet, quality_targets, sample_scores
     run, data = Path(run), Path(data)
     net, tok = TreeTransformer.load(run / ckpt), Tokenizer.load(run / "tokenizer.json")
     test, train_ = load_trees(data, "test"), load_trees(data, "train")
     if limit: test, train_ = test[:limit], train_[:limit]   # a smoke test only
     if n_test: test = test[:n_test]
-    res = _run_record(run, data, ckpt, net, len(test), len(train_))
-    res["sampling"] = {"n": n_samples, "temperature": temperature, "top_p": top_p, "seed": seed}
+    res = _run_record(run, data, ckpt, net, len(test), len(train_), trained)
+    res["sampling"] = {"n": n_samples, "temperature": temperature, "top_p": top_p, "seed": seed,
+                       "decoding": "snap" if structure == "snap" else "structure-aware"}
     t = time.time(); ppl = perplexity(net, tok.encode_batch(test, res["run"]["args"]["order"]), 8, progress)
     res |= {"PPL": ppl["ppl"], "val_loss": ppl["loss"], "seconds_ppl": time.time() - t}; t = time.time()
-    seqs, free = _samples(run, ckpt, n_samples, n_connect, batch, seed, temperature, top_p, workers, progress)
+    seqs, free = _samples(run, ckpt, n_samples, n_connect, batch, seed, temperature, top_p, workers, progress,
+                          structure)
     res["seconds_sampling"], t = time.time() - t, time.time()
     R, T, pn = tree_clouds(test, seed=2), tree_clouds(train_, seed=3), load_species_pointnet()
     sc = sample_scores(seqs, free, tok, R, T, pn)
@@ -271,6 +295,10 @@ def ship_parser() -> argparse.ArgumentParser:
                      recipe=None).items():
         kind = int if k in ("limit", "n_test") else str if v is None else type(v)
         p.add_argument(f"--{k.replace('_', '-')}", default=v, type=kind)
+    p.add_argument("--decoding", choices=("structure", "snap"), default="structure", help="how the scored samples "
+                   "are drawn connected: structure-aware decoding (default) or freely with loose starts snapped")
+    p.add_argument("--shipped", action="store_true", help="score the package's model NAME as it ships (its training "
+                   "as results/NAME_eval.json records it) instead of a run")
     p.add_argument("--no-ship", action="store_true")
     p.add_argument("--recard", action="store_true", help="no evaluation: the card (and the record's targets) anew "
                    "from results/NAME_eval.json and the shipped weights, as the figures a model is held to change")
@@ -303,10 +331,23 @@ def _shipped_before(init, name: str, results=None, run: dict | None = None) -> d
             "minutes": (old["run"]["train_seconds"] or 0) / 60 + (prev["minutes"] if prev else 0)}
 
 
+# %% ../nbs/05a_species_runs.ipynb #7e6facb6
+def _shipped_run(name: str, folder, weights=None, results=None) -> tuple:
+    """The package's model `name` as a run in `folder` (its weights as best.pt, its tokenizer), for `ship_main
+    --shipped`: (folder, the run part of its record `results`/NAME_eval.json, that record's recipe)."""
+    weights, rec = Path(weights or WEIGHTS), Path(results or "results") / f"{name}_eval.json"
+    if not (weights / f"{name}.pt").is_file(): raise TreebookError(f"no model {weights / name}.pt ships")
+    if not rec.is_file(): raise TreebookError(f"{name} ships without its record {rec}: its training is not known")
+    old = json.loads(rec.read_text())
+    shutil.copyfile(weights / f"{name}.pt", Path(folder) / "best.pt")
+    shutil.copyfile(weights / f"{name}.tok.json", Path(folder) / "tokenizer.json")
+    return Path(folder), old["run"], old.get("recipe")
+
 # %% ../nbs/05a_species_runs.ipynb #c1f6290a
 def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
-    """`scripts/ship_elm.py`: evaluate the run, write its record (`record(res, path, **machine)`: the script's
-    provenance), and unless --no-ship, `ship_run` with its `species_card`. Returns the record."""
+    """`scripts/ship_elm.py`: evaluate the run (or with --shipped the package's model), write its record
+    (`record(res, path, **machine)`: the script's provenance), and unless --no-ship, `ship_run` with its
+    `species_card`. Returns the record."""
     a = ship_parser().parse_args(argv)
     name = _species(a.species).name
     if a.recard: return recard(name, a.out_json or Path(results or "results") / f"{name}_eval.json", weights,
@@ -314,16 +355,21 @@ def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
     run, data = Path(a.run or f"runs/{name}"), Path(a.data or f"data/{name}")
     if load_manifest(data)["config"]["species"] != name: raise TreebookError(f"{data} holds no {name} dataset")
     torch.set_num_threads(a.threads)
-    res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
-                       a.limit, a.ckpt, n_test=a.n_test)
-    res["recipe"] = a.recipe or _default_recipe(name)
-    if p := _shipped_before(res["run"]["args"].get("init"), name, results, res["run"]): res["run"]["init_from"] = p
-    res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
-                                                      threads=a.threads, torch=torch.__version__)
-    print(json.dumps(res, indent=1))
-    if not a.no_ship:
-        card = species_card(res, TreeTransformer.load(run / a.ckpt).config.max_len, a.batch, a.n_connect)
-        ship_run(run, res, card, weights, results, a.ckpt); print(card)
+    with tempfile.TemporaryDirectory() as tmp:
+        trained = None
+        if a.shipped: run, trained, recipe = _shipped_run(name, tmp, weights, results); a.recipe = a.recipe or recipe
+        res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
+                           a.limit, a.ckpt, n_test=a.n_test, structure="snap" if a.decoding == "snap" else True,
+                           trained=trained)
+        res["recipe"] = a.recipe or _default_recipe(name)
+        if not a.shipped and (p := _shipped_before(res["run"]["args"].get("init"), name, results, res["run"])):
+            res["run"]["init_from"] = p
+        res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
+                                                          threads=a.threads, torch=torch.__version__)
+        print(json.dumps(res, indent=1))
+        if not a.no_ship:
+            card = species_card(res, TreeTransformer.load(run / a.ckpt).config.max_len, a.batch, a.n_connect)
+            ship_run(run, res, card, weights, results, a.ckpt); print(card)
     return res
 
 # %% ../nbs/05a_species_runs.ipynb #f8cd07cf
