@@ -260,10 +260,17 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
 def ship_run(run, res: dict, card: str, weights=None, results=None, ckpt: str = "best.pt") -> list:
     """Copy the run's weights and tokenizer into `weights` (default the package's `WEIGHTS`) as NAME.pt and
     NAME.tok.json beside the card NAME.md, and its loss curve to `results`/NAME_loss.png (if `results`); NAME is the
-    record's species. Returns the paths."""
+    record's species. A card scored on snapped samples lists NAME in decoding.json there (`model_decoding`), any
+    other takes it off. Returns the paths."""
     name, run, weights = res.get("species", "elm"), Path(run), Path(weights or WEIGHTS)
     out = [weights / f"{name}.pt", weights / f"{name}.tok.json", weights / f"{name}.md"]
     shutil.copyfile(run / ckpt, out[0]); shutil.copyfile(run / "tokenizer.json", out[1]); out[2].write_text(card)
+    dec, snap = weights / "decoding.json", res.get("sampling", {}).get("decoding") == "snap"
+    listed = json.loads(dec.read_text()) if dec.is_file() else {}
+    if snap != (listed.get(name) == "snap"):
+        listed = {k: v for k, v in listed.items() if k != name} | ({name: "snap"} if snap else {})
+        text = json.dumps(listed, indent=1, sort_keys=True) + "\n"
+        out.append(_atomic_write(dec, lambda f: f.write(text.encode())))
     if results is not None and (run / "loss.png").is_file():
         out.append(Path(results) / f"{name}_loss.png"); shutil.copyfile(run / "loss.png", out[-1])
     return out
