@@ -30,10 +30,10 @@ from .tokens import ORDERS, Tokenizer, _anchored, _as_tokens, _cell_keys, _link,
 from .train import WEIGHTS, perplexity, train
 
 # %% auto #0
-__all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run', 'ship_run',
-           'recard', 'ship_parser', 'record_steps', 'run_key', 'ship_main', 'models_table', 'parent_gaps',
-           'relative_lengths', 'long_share', 'pace', 'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs', 'parser',
-           'main']
+__all__ = ['TREES', 'RECIPE', 'PLURAL', 'species_data', 'run_status', 'species_train', 'species_card', 'evaluate_run',
+           'list_decoding', 'ship_run', 'recard', 'ship_parser', 'record_steps', 'run_key', 'ship_main', 'models_table',
+           'parent_gaps', 'relative_lengths', 'long_share', 'pace', 'plan_steps', 'pack_run', 'unpack_run', 'gpu_runs',
+           'parser', 'main']
 
 # %% ../nbs/05a_species_runs.ipynb #8f043e7f
 TREES = 10_000   # trees in each species' dataset
@@ -256,14 +256,28 @@ def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: 
     res["seconds_metrics"] = time.time() - t; res["targets"] = quality_targets(res)
     return res
 
+# %% ../nbs/05a_species_runs.ipynb #20f34d38
+def list_decoding(res: dict, weights=None) -> Path | None:
+    """List the record `res`'s species in `weights`/decoding.json (default the package's) if its card's samples were
+    snapped, so that `model_decoding` draws its samples so too; take it off if they were not. Returns the file's
+    path if it changed."""
+    name, dec = res.get("species", "elm"), Path(weights or WEIGHTS) / "decoding.json"
+    snap = res.get("sampling", {}).get("decoding") == "snap"
+    listed = json.loads(dec.read_text()) if dec.is_file() else {}
+    if snap == (listed.get(name) == "snap"): return None
+    listed = {k: v for k, v in listed.items() if k != name} | ({name: "snap"} if snap else {})
+    text = json.dumps(listed, indent=1, sort_keys=True) + "\n"
+    return _atomic_write(dec, lambda f: f.write(text.encode()))
+
 # %% ../nbs/05a_species_runs.ipynb #ecba065c
 def ship_run(run, res: dict, card: str, weights=None, results=None, ckpt: str = "best.pt") -> list:
     """Copy the run's weights and tokenizer into `weights` (default the package's `WEIGHTS`) as NAME.pt and
     NAME.tok.json beside the card NAME.md, and its loss curve to `results`/NAME_loss.png (if `results`); NAME is the
-    record's species. Returns the paths."""
+    record's species; `list_decoding` notes how its card's samples were drawn. Returns the paths."""
     name, run, weights = res.get("species", "elm"), Path(run), Path(weights or WEIGHTS)
     out = [weights / f"{name}.pt", weights / f"{name}.tok.json", weights / f"{name}.md"]
     shutil.copyfile(run / ckpt, out[0]); shutil.copyfile(run / "tokenizer.json", out[1]); out[2].write_text(card)
+    if p := list_decoding(res, weights): out.append(p)
     if results is not None and (run / "loss.png").is_file():
         out.append(Path(results) / f"{name}_loss.png"); shutil.copyfile(run / "loss.png", out[-1])
     return out
@@ -271,7 +285,8 @@ def ship_run(run, res: dict, card: str, weights=None, results=None, ckpt: str = 
 # %% ../nbs/05a_species_runs.ipynb #a22e02ef
 def recard(name: str, record, weights=None, batch: int = 50, n_connect: int = 100) -> dict:
     """The card of the shipped model `name` anew from its evaluation record (a path), whose targets `quality_targets`
-    computes again and writes back: for when the figures a model is held to change. Returns the record."""
+    computes again and writes back: for when the figures a model is held to change, or its record does
+    (`list_decoding` too). Returns the record."""
     from treebook.metrics import quality_targets
     record, weights = Path(record), Path(weights or WEIGHTS)
     if not record.is_file(): raise TreebookError(f"no evaluation record {record}: evaluate the run first")
@@ -281,6 +296,7 @@ def recard(name: str, record, weights=None, batch: int = 50, n_connect: int = 10
     _atomic_write(record, lambda f: f.write(json.dumps(res, indent=1).encode()))
     card = species_card(res, TreeTransformer.load(weights / f"{name}.pt").config.max_len, batch, n_connect)
     _atomic_write(weights / f"{name}.md", lambda f: f.write(card.encode()))
+    list_decoding(res, weights)
     return res
 
 

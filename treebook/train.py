@@ -30,7 +30,7 @@ from .datasets import load_manifest, load_trees
 
 # %% auto #0
 __all__ = ['WEIGHTS', 'sequence_loss', 'perplexity', 'augment', 'lr_at', 'train', 'load_pretrained', 'shipped_species',
-           'species_model', 'sample_trees', 'sampled_gallery', 'demo_sample', 'main']
+           'species_model', 'model_decoding', 'sample_trees', 'sampled_gallery', 'demo_sample', 'main']
 
 # %% ../nbs/05_train.ipynb #7ba35ceb
 def sequence_loss(model, seqs) -> tuple:
@@ -386,6 +386,17 @@ def species_model(name: str) -> str:
                             "trains one)")
     return name
 
+# %% ../nbs/05_train.ipynb #8c4b122c
+def model_decoding(model, weights=None) -> bool | str:
+    """How `model` draws connected trees by default: "snap" for a shipped model (a name) that `weights`/decoding.json
+    (default the package's `WEIGHTS`) lists so, else True (structure-aware decoding)."""
+    if not isinstance(model, str) or Path(model).suffix == ".pt" or os.sep in model: return True
+    p = Path(weights or WEIGHTS) / "decoding.json"
+    if not p.is_file(): return True
+    try: listed = json.loads(p.read_text())
+    except ValueError as e: raise TreebookError(f"{p} is broken ({e}): reinstall treebook") from None
+    return "snap" if isinstance(listed, dict) and listed.get(model) == "snap" else True
+
 # %% ../nbs/05_train.ipynb #be98b4ad
 def _batch_seed(seed: int, k: int) -> int:
     "The seed of batch `k` of a large sample (batch 0 keeps `seed`, so a sample that fits one batch is as before)."
@@ -393,12 +404,13 @@ def _batch_seed(seed: int, k: int) -> int:
 
 # %% ../nbs/05_train.ipynb #1e745d48
 def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0, top_p: float | None = None,
-                 top_k: int | None = None, seed: int = 0, structure: bool | str = True, progress: bool = False,
+                 top_k: int | None = None, seed: int = 0, structure: bool | str | None = None, progress: bool = False,
                  batch_size: int = 256, species: str | None = None) -> list:
     """`n` trees sampled from a shipped model (a name, a checkpoint path, or a (model, tokenizer) pair; default `elm`)
     or from the shipped model of `species`; `structure` keeps every tree connected: True by structure-aware decoding,
-    "snap" by drawing freely and moving each loose start onto the nearest earlier end (`snap_starts`). They are drawn
-    `batch_size` at a time, so memory stays bounded however large `n` is."""
+    "snap" by drawing freely and moving each loose start onto the nearest earlier end (`snap_starts`), None as the
+    model's card was scored (`model_decoding`). They are drawn `batch_size` at a time, so memory stays bounded however
+    large `n` is."""
     if model is not None and species is not None: raise TreebookError("give a model or a species, not both")
     if not isinstance(n, (int, np.integer)) or n < 1: raise TreebookError(f"n must be a whole number >= 1, got {n!r}")
     if not (math.isfinite(temperature) and temperature >= 0):
@@ -406,9 +418,10 @@ def sample_trees(n: int = 16, model: str | None = None, temperature: float = 1.0
     if top_p is not None and not 0 < top_p <= 1: raise TreebookError(f"top_p must be in (0, 1], got {top_p}")
     if batch_size < 1: raise TreebookError(f"batch_size must be at least 1, got {batch_size}")
     if isinstance(structure, np.bool_): structure = bool(structure)
-    if not (structure is True or structure is False or structure == "snap"):
-        raise TreebookError(f"structure must be True, False or 'snap', got {structure!r}")
+    if not (structure is None or structure is True or structure is False or structure == "snap"):
+        raise TreebookError(f"structure must be True, False, 'snap' or None, got {structure!r}")
     model = species_model(species) if species is not None else "elm" if model is None else model
+    if structure is None: structure = model_decoding(model)
     net, tok = load_pretrained(model) if isinstance(model, (str, Path)) else model
     from treebook.sampling import sample, snap_starts
     threads = torch.get_num_threads()
