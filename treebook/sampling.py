@@ -227,17 +227,19 @@ def sample(model: TreeTransformer, n: int = 1, *, tok=None, prompt=None, max_len
 # %% ../nbs/04a_sampling.ipynb #92e4b2ef
 def snap_starts(seq, tok) -> np.ndarray:
     """A copy of token sequence `seq` in which the first branch starts at the root cell and every later one at an
-    earlier branch's end: a start that is not moves to the nearest (in cells), so the sequence reads as one tree."""
+    earlier branch's end: a start that is not moves to the nearest (in cells), so the sequence reads as one tree.
+    Its branches are those the tokenizer reads: after the leading [SOS] tokens (however many), up to [EOS]."""
+    from treebook.tokens import _loose_rows
     seq = np.array(seq, dtype=np.int64)
-    m = max(0, (len(seq) - 8) // 8)
-    V = seq[8:8 + 8 * m].reshape(-1, 8)
+    V, b = _loose_rows(seq)
+    V = V.copy()
     root = np.asarray(tok.root_tokens, dtype=np.int64)[None]
     ends = []
-    for i in np.flatnonzero((V < tok.n_values).all(1)):
+    for i in np.flatnonzero(((V >= 0) & (V < tok.n_values)).all(1)):
         E = np.concatenate(ends) if ends else root        # the first branch starts at the root cell
         if not (E == V[i, :3]).all(1).any():
             d = np.linalg.norm((E - V[i, :3]).astype(float), axis=1)
             V[i, :3] = E[len(d) - 1 - int(np.argmin(d[::-1]))]
         ends.append(V[i, 4:7][None])
-    seq[8:8 + 8 * m] = V.reshape(-1)
+    seq[b:b + V.size] = V.reshape(-1)
     return seq
