@@ -95,6 +95,8 @@ def _card_head(res: dict, max_len: int) -> str:
     epochs = run["last_step"] * ar["batch_size"] * ar["world"] / d["train"]
     cmd = res.get("recipe", _default_recipe(name))
     how = f"`{run['trained_by']}` (training), then `{cmd}`" if run.get("trained_by") else f"`{cmd}` (resumable)"
+    how += (f" trained it; the model as shipped was scored again by `{res['command']}`" if res.get("scored_as_shipped")
+            else f", which ends with `{res['command']}`")
     where = run.get("device") or "2 shared CPU cores"
     window = f", window {ar['window']} in the full-resolution layers" if ar.get("window") else ""
     window += " (which also see every earlier branch's last token)" if ar.get("ends") else ""
@@ -114,7 +116,7 @@ steps then cosine to a tenth, batch {ar['batch_size']} x {ar['world']} process(e
 {ar['grad_clip']}, rotation about z and mirroring; seed {ar['seed']}{start}; {run['last_step']} steps{stopped} \
 ({epochs:.2f} epochs) in {(run['train_seconds'] or 0) / 60:.0f} minutes on {where}. Shipped weights: step \
 {run['best_step']} (lowest validation loss on {ar['val_trees']} held-out trees).
-- **Command**: {how}, which ends with `{res['command']}`.
+- **Command**: {how}.
 - **Commit** of the evaluation: {res['commit']}; full figures in `results/{name}_eval.json`.
 """
 
@@ -378,6 +380,7 @@ def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
                            a.limit, a.ckpt, n_test=a.n_test, structure="snap" if a.decoding == "snap" else True,
                            trained=trained)
         res["recipe"] = a.recipe or _default_recipe(name)
+        if a.shipped: res["scored_as_shipped"] = True
         if not a.shipped and (p := _shipped_before(res["run"]["args"].get("init"), name, results, res["run"])):
             res["run"]["init_from"] = p
         res = (record or (lambda r, path, **machine: r))(res, a.out_json or f"results/{name}_eval.json",
