@@ -35,6 +35,7 @@ def stage(r: dict, commit: str) -> dict:
             "minutes": round(run["train_seconds"] / 60, 1) if run.get("train_seconds") else None,
             "PPL": r["PPL"], "1-NNA": s["1-NNA"], "COV-CD": s["COV-CD"], "MMD-CD / ref": s["MMD-CD"] / ref["MMD-CD"],
             "JSD": s["JSD"], "FPD": s["FPD"], "Connect_free": r["Connect_free"]["Connect"],
+            "decoding": r["sampling"].get("decoding", "structure-aware"),   # how the scored samples were drawn
             "met": sum(met.values()), "of": len(met), "held_out": r["data"]["test"], "commit": commit}
 
 

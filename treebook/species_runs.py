@@ -396,8 +396,8 @@ def models_table(results="results") -> str:
     "A markdown table of every shipped species' model, from its evaluation record `results`/NAME_eval.json."
     from treebook.metrics import quality_targets
     from treebook.train import shipped_species
-    rows = ["| species | trained on | steps | held-out trees | 1-NNA | COV-CD | MMD-CD / ref. | Connect, free | "
-            "whole trees, free | figures met |", "|---|---|---|---|---|---|---|---|---|---|"]
+    rows = ["| species | trained on | steps | held-out trees | samples drawn | 1-NNA | COV-CD | MMD-CD / ref. | "
+            "Connect, free | whole trees, free | figures met |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in shipped_species():
         p = Path(results) / f"{name}_eval.json"
         if not p.is_file(): raise TreebookError(f"{name} ships without its record {p}: run scripts/ship_elm.py")
@@ -407,8 +407,9 @@ def models_table(results="results") -> str:
         p0 = run.get("init_from")   # a run that went on from the species' shipped model: its steps and the earlier
         steps = f"{record_steps(r):,} ({p0['steps']:,} + {run['last_step']:,})" if p0 else \
             f"{run['last_step']:,}"
+        drawn = "snapped" if r["sampling"].get("decoding") == "snap" else "structure-aware"
         rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {steps} | "
-                    f"{r['data']['test']} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
+                    f"{r['data']['test']} | {drawn} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
                     f"{cf['Connect']:.3f} | {cf['Connected']:.2f} | {sum(met.values())} of {len(met)} |")
     return "\n".join(rows)
 
