@@ -375,7 +375,9 @@ def ship_main(argv=None, record=None, weights=None, results=None) -> dict:
     torch.set_num_threads(a.threads)
     with tempfile.TemporaryDirectory() as tmp:
         trained = None
-        if a.shipped: run, trained, recipe = _shipped_run(name, tmp, weights, results); a.recipe = a.recipe or recipe
+        if a.shipped:   # the package's weights, copied as best.pt
+            (run, trained, recipe), a.ckpt = _shipped_run(name, tmp, weights, results), "best.pt"
+            a.recipe = a.recipe or recipe
         res = evaluate_run(run, data, a.n_samples, a.n_connect, a.batch, a.seed, a.temperature, a.top_p, a.workers,
                            a.limit, a.ckpt, n_test=a.n_test, structure="snap" if a.decoding == "snap" else True,
                            trained=trained)
@@ -409,7 +411,8 @@ def models_table(results="results") -> str:
             f"{run['last_step']:,}"
         drawn = "snapped" if r["sampling"].get("decoding") == "snap" else "structure-aware"
         rows.append(f"| {name} | {run.get('device') or '2 shared CPU cores'} | {steps} | "
-                    f"{r['data']['test']} | {drawn} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | {s['MMD-CD'] / ref['MMD-CD']:.2f} | "
+                    f"{r['data']['test']} | {drawn} | {s['1-NNA']:.3f} | {s['COV-CD']:.3f} | "
+                    f"{s['MMD-CD'] / ref['MMD-CD']:.2f} | "
                     f"{cf['Connect']:.3f} | {cf['Connected']:.2f} | {sum(met.values())} of {len(met)} |")
     return "\n".join(rows)
 
