@@ -3,14 +3,15 @@
 
 Usage: python benchmarks/sample.py [--species elm shadbush ...] [--n 16] [--repeats 3]
 Writes results/sample.json: command, commit, machine, and for each species (default: every one that ships) the
-seconds of each repeat, best and median, and the branches of the trees drawn.
+seconds of each repeat, best and median, and the branches of the trees drawn, each model drawing as its card was
+scored (`model_decoding`: structure-aware, or snapped where the card says so).
 """
 import argparse, json, os, platform, sys, time
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
 import provenance   # scripts/provenance.py
 import numpy as np, torch
-from treebook.train import sample_trees, load_pretrained, shipped_species, species_model
+from treebook.train import sample_trees, load_pretrained, shipped_species, species_model, model_decoding
 
 root = Path(__file__).resolve().parent.parent
 p = argparse.ArgumentParser()
@@ -20,12 +21,13 @@ a = p.parse_args()
 runs = {}
 for name in a.species or shipped_species():
     t = time.time(); model = load_pretrained(species_model(name)); load_s = time.time() - t
-    times, branches = [], []
+    times, branches, way = [], [], model_decoding(species_model(name))   # as `treebook sample` draws by default
     for r in range(a.repeats):
-        t = time.time(); trees = sample_trees(a.n, model=model, seed=r); times.append(time.time() - t)
+        t = time.time(); trees = sample_trees(a.n, model=model, seed=r, structure=way); times.append(time.time() - t)
         branches.append(float(np.mean([x.n for x in trees])))
     runs[name] = {"load_seconds": load_s, "seconds": times, "best_s": min(times), "median_s": float(np.median(times)),
-                  "branches_mean": branches, "max_len": model[0].config.max_len}
+                  "branches_mean": branches, "max_len": model[0].config.max_len,
+                  "decoding": "snap" if way == "snap" else "structure-aware"}
     print(name, json.dumps(runs[name]))
 res = {"command": "python benchmarks/sample.py " + " ".join(sys.argv[1:]),
        "commit": provenance.commit(),
