@@ -21,7 +21,7 @@ a = p.parse_args()
 runs = {}
 for name in a.species or shipped_species():
     t = time.time(); model = load_pretrained(species_model(name)); load_s = time.time() - t
-    times, branches, way = [], [], model_decoding(species_model(name))   # as `treebook sample` draws by default
+    times, branches, way = [], [], model_decoding(name)   # as `treebook sample` draws by default
     for r in range(a.repeats):
         t = time.time(); trees = sample_trees(a.n, model=model, seed=r, structure=way); times.append(time.time() - t)
         branches.append(float(np.mean([x.n for x in trees])))

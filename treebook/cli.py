@@ -617,8 +617,7 @@ def cmd_sample(args):
     model = species_model(args.species) if args.species else args.model or "elm"
     out_folder(args.out); _model_arg(model)
     trees = sample_trees(args.n, model=model, temperature=args.temperature, top_p=args.top_p, top_k=args.top_k,
-                         seed=args.seed, structure="snap" if args.snap else False if args.no_structure else
-                         True if args.structure else None, progress=True)
+                         seed=args.seed, structure=args.structure, progress=True)
     for p in write_trees(trees, args.out, f"sampled_{Path(str(model)).stem}", picture=args.render, seed=args.seed):
         print(f"wrote {p}")
     return 0
@@ -977,11 +976,14 @@ def _add_sample(sub):
     s.add_argument("--top-k", type=flag_number(int, 1), default=None,
                    help="keep only the k likeliest tokens (default: off)")
     dec = s.add_mutually_exclusive_group()
-    dec.add_argument("--structure", action="store_true", help="structure-aware decoding, whatever the model's "
-                     "default (the one its card was scored with: structure-aware, or --snap where the card says so)")
-    dec.add_argument("--no-structure", action="store_true", help="turn structure-aware decoding off")
-    dec.add_argument("--snap", action="store_true", help="draw freely, then move each loose branch start onto the "
-                     "nearest earlier end (connected trees without structure-aware decoding)")
+    # one `structure` for sample_trees: None (the default) draws as the model's card was scored (`model_decoding`)
+    dec.add_argument("--structure", dest="structure", action="store_const", const=True, default=None,
+                     help="structure-aware decoding, whatever the model's default (the one its card was scored with: "
+                     "structure-aware, or --snap where the card says so)")
+    dec.add_argument("--no-structure", dest="structure", action="store_const", const=False,
+                     help="turn structure-aware decoding off")
+    dec.add_argument("--snap", dest="structure", action="store_const", const="snap", help="draw freely, then move each "
+                     "loose branch start onto the nearest earlier end (connected trees without structure-aware decoding)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG per tree")
     s.add_argument("--out", required=True, help="output folder")

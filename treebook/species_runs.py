@@ -210,19 +210,19 @@ def _run_record(run: Path, data: Path, ckpt: str, net, n_test: int, n_train: int
     part, instead when the model is a shipped one) and the dataset's counts."""
     meta = torch.load(run / ckpt, map_location="cpu", weights_only=True)["meta"]
     cfg = load_manifest(data)["config"]
-    rec = {"species": cfg["species"], "data": {"folder": str(data), "train": n_train, "test": n_test,
-                                               "manifest_seed": cfg["seed"], "n": cfg["n"],
-                                               "max_branches": cfg["max_branches"]}}
     if trained is not None:
         if (trained.get("best_step"), trained.get("args")) != (meta["step"], meta.get("args")):
             raise TreebookError(f"{run / ckpt} is not the model its record describes (step {meta['step']} against "
                                 f"{trained.get('best_step')})")
-        return {"species": rec["species"], "run": dict(trained), "data": rec["data"]}
-    state = torch.load(run / "last.pt", map_location="cpu", weights_only=True)
-    rec["run"] = {"best_step": meta["step"], "last_step": state["step"], "train_seconds": state.get("seconds"),
-                  "args": state["args"], "n_params": net.n_params, "device": state.get("device")}
-    rec["run"] |= {k: state[k] for k in ("trained_by", "commit") if state.get(k)}   # a run packed by gpu_runs
-    return {k: rec[k] for k in ("species", "run", "data")}
+        done = dict(trained)
+    else:
+        state = torch.load(run / "last.pt", map_location="cpu", weights_only=True)
+        done = {"best_step": meta["step"], "last_step": state["step"], "train_seconds": state.get("seconds"),
+                "args": state["args"], "n_params": net.n_params, "device": state.get("device")}
+        done |= {k: state[k] for k in ("trained_by", "commit") if state.get(k)}   # a run packed by gpu_runs
+    return {"species": cfg["species"], "run": done,
+            "data": {"folder": str(data), "train": n_train, "test": n_test, "manifest_seed": cfg["seed"],
+                     "n": cfg["n"], "max_branches": cfg["max_branches"]}}
 
 # %% ../nbs/05a_species_runs.ipynb #53171142
 def evaluate_run(run, data, n_samples: int = 1000, n_connect: int = 100, batch: int = 50, seed: int = 0,
