@@ -982,8 +982,9 @@ def _add_sample(sub):
                      "structure-aware, or --snap where the card says so)")
     dec.add_argument("--no-structure", dest="structure", action="store_const", const=False,
                      help="turn structure-aware decoding off")
-    dec.add_argument("--snap", dest="structure", action="store_const", const="snap", help="draw freely, then move each "
-                     "loose branch start onto the nearest earlier end (connected trees without structure-aware decoding)")
+    dec.add_argument("--snap", dest="structure", action="store_const", const="snap",
+                     help="draw freely, then move each loose branch start onto the nearest earlier end (connected "
+                     "trees without structure-aware decoding)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default: 0)")
     s.add_argument("--render", action="store_true", help="also write a PNG per tree")
     s.add_argument("--out", required=True, help="output folder")
