@@ -152,7 +152,8 @@ def species_card(res: dict, max_len: int, batch: int = 50, n_connect: int = 100)
     lg = "" if lg is None else f"""
 - Branches that span the crown (`long_share`): {lg['twice']:.2%} of the samples' branches are longer, over their \
 tree's height, than twice the held-out trees' 99.9th percentile ({lg['threshold']:.3f}), against \
-{lg['reference_twice']:.2%} of the held-out trees' own; 99th percentiles {lg['q99']:.3f} and {lg['reference_q99']:.3f}"""
+{lg['reference_twice']:.2%} of the held-out trees' own; 99th percentiles \
+{lg['q99']:.3f} and {lg['reference_q99']:.3f}"""
     return _card_head(res, max_len) + f"""
 ## Scores on the held-out {PLURAL[name]}
 
